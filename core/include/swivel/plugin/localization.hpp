@@ -1,0 +1,31 @@
+#pragma once
+// Localization plugin: pose (and covariance) from odometry increments, gyro and, where a
+// source provides them, absolute pose fixes (HardwareState::motion_capture).
+
+#include "swivel/plugin/abi.hpp"
+#include "swivel/plugin/plugin_context.hpp"
+#include "swivel/types.hpp"
+
+namespace swivel {
+
+class Localization {
+ public:
+  virtual ~Localization() = default;
+
+  /// Off the loop. @throws ConfigError naming the key.
+  virtual void configure(const PluginContext& ctx) = 0;
+
+  /// Off the loop. Starts from `initial` (hand-over on a hot swap: the outgoing
+  /// instance's estimate). Ignores the covariance when it has none.
+  virtual void reset(const PoseEstimate& initial) = 0;
+
+  /// Real-time safe. One cycle: the drivetrain's odometry and this cycle's readings.
+  virtual Status update(const OdometryIncrement& odometry, const HardwareState& readings) noexcept = 0;
+
+  /// Real-time safe. The current output.
+  [[nodiscard]] virtual PoseEstimate estimate() const noexcept = 0;
+
+  [[nodiscard]] virtual const char* last_error() const noexcept { return ""; }
+};
+
+}  // namespace swivel

@@ -1,0 +1,67 @@
+#pragma once
+// What the real-time loop publishes every cycle (into a lock-free snapshot buffer) and
+// what it accepts (through lock-free rings). Trivially copyable by construction.
+
+#include <array>
+#include <cstdint>
+#include <type_traits>
+
+#include "swivel/types.hpp"
+
+namespace swivel {
+
+enum class LoopMode : std::uint8_t {
+  kIdle = 0,         ///< no command yet: zero velocity
+  kVelocity = 1,     ///< following velocity commands
+  kCalibration = 2,  ///< a calibration procedure drives the actuators
+  kSafeStop = 3,     ///< controlled stop after a fault; zero velocity until cleared
+};
+
+/// Why the loop stopped the robot (or rejected something). kNone when healthy.
+enum class FaultCode : std::uint16_t {
+  kNone = 0,
+  kCommandTimeout,      ///< newest velocity command older than its timeout
+  kNonFiniteCommand,    ///< NaN/inf in a velocity command (rejected)
+  kNonFiniteSensor,     ///< NaN/inf from the hardware plugin
+  kHardwareError,       ///< hardware plugin returned kError
+  kDrivetrainError,     ///< drivetrain plugin returned kError
+  kLocalizationError,   ///< localization plugin returned kError or a non-finite pose
+  kCalibrationError,    ///< calibration procedure failed or was cancelled
+};
+
+const char* fault_code_name(FaultCode code) noexcept;
+
+/// A velocity command as it enters the loop.
+struct VelocityCommand {
+  Twist2 twist;
+  double received_s = 0.0;  ///< monotonic time it was received (age = now - received_s)
+  std::uint64_t sequence = 0;
+};
+
+/// Fixed-size, NUL-terminated name (plugin names, fault details) that can cross threads.
+using ShortName = std::array<char, 32>;
+
+/// The loop's state at the end of one cycle.
+struct StateSnapshot {
+  std::uint64_t cycle = 0;
+  double stamp_s = 0.0;          ///< monotonic time of the cycle's reading
+  PoseEstimate estimate;         ///< localization output, world frame
+  Twist2 odometry_twist;         ///< body twist from forward kinematics, robot frame
+  Twist2 command_twist;          ///< twist applied this cycle after limits, robot frame
+  double odometry_residual = 0.0;
+  double gyro_wz_radps = 0.0;
+  std::uint32_t module_count = 0;
+  std::array<ModuleState, kMaxModules> modules{};
+  LoopMode mode = LoopMode::kIdle;
+  FaultCode fault = FaultCode::kNone;     ///< active fault (kNone when healthy)
+  std::uint64_t fault_count = 0;          ///< faults raised since start
+  ShortName localization_plugin{};        ///< active localization plugin
+  std::uint64_t localization_swaps = 0;   ///< hot swaps taken by the loop
+  bool has_truth = false;                 ///< simulation: the true pose is known
+  Pose2 truth;
+};
+
+static_assert(std::is_trivially_copyable_v<VelocityCommand>);
+static_assert(std::is_trivially_copyable_v<StateSnapshot>);
+
+}  // namespace swivel

@@ -1,0 +1,26 @@
+#pragma once
+// Kinematics of the differential-drive (docent) robot, PAPERS.md §2 eq. (1)-(6).
+// Plain maths: no threads, no YAML. Real-time safe (no allocation, noexcept).
+
+#include "swivel/robot_model.hpp"
+#include "swivel/types.hpp"
+
+namespace swivel::differential {
+
+struct WheelRates {
+  double left_radps = 0.0;
+  double right_radps = 0.0;
+};
+
+/// Wheel rates that produce forward speed `vx_mps` and yaw rate `wz_radps`.
+WheelRates inverse(const DifferentialParams& p, double vx_mps, double wz_radps) noexcept;
+
+/// Body twist (vy = 0) from wheel rates.
+Twist2 forward(const DifferentialParams& p, const WheelRates& rates) noexcept;
+
+/// Motion over one step in the robot frame at the start of the step, from wheel angle
+/// increments (rad): d = (dR + dL)/2, dyaw = (dR - dL)/b, integrated along the arc.
+Pose2 forward_increment(const DifferentialParams& p, double dpsi_left_rad,
+                        double dpsi_right_rad) noexcept;
+
+}  // namespace swivel::differential
