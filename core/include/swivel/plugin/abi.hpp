@@ -4,6 +4,7 @@
 // before calling anything else. Bump kSwivelPluginAbiVersion whenever a plugin interface
 // or a type in swivel/types.hpp changes layout.
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -83,9 +84,9 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
           try {                                                                             \
             return static_cast<Interface*>(new Class());                                    \
           } catch (const std::exception& e) {                                               \
-            static thread_local char message[256];                                          \
-            std::snprintf(message, sizeof message, "%s", e.what());                         \
-            if (error != nullptr) *error = message;                                         \
+            static thread_local std::array<char, 256> message{};                            \
+            (void)std::snprintf(message.data(), message.size(), "%s", e.what());            \
+            if (error != nullptr) *error = message.data();                                  \
           } catch (...) {                                                                   \
             if (error != nullptr) *error = "unknown exception in constructor";              \
           }                                                                                 \
