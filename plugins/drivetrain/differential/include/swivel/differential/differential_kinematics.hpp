@@ -23,4 +23,10 @@ Twist2 forward(const DifferentialParams& p, const WheelRates& rates) noexcept;
 Pose2 forward_increment(const DifferentialParams& p, double dpsi_left_rad,
                         double dpsi_right_rad) noexcept;
 
+/// Factor in (0, 1] by which (vx, wz) must both be scaled so that neither wheel exceeds
+/// `max_wheel_rate_radps`; scaling both keeps the path curvature wz/vx. 1 when within
+/// limits, 0 when the limit is not positive. Real-time safe.
+double wheel_limit_scale(const DifferentialParams& p, double vx_mps, double wz_radps,
+                         double max_wheel_rate_radps) noexcept;
+
 }  // namespace swivel::differential

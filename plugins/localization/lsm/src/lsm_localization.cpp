@@ -1,0 +1,89 @@
+#include "lsm_localization.hpp"
+
+#include <cmath>
+
+#include "swivel/config/config_error.hpp"
+#include "swivel/config/param_reader.hpp"
+#include "swivel/plugin/abi.hpp"
+
+namespace swivel::plugins {
+
+void LsmLocalization::configure(const PluginContext& ctx) {
+  ParamReader params(ctx.params, ctx.config_file, ctx.params_path);
+  localization::LsmConfig lsm;
+  lsm.mode = params.choice_or("mode", "paper", {"paper", "heading_aligned"}) == "paper"
+                 ? localization::LsmMode::kPaper
+                 : localization::LsmMode::kHeadingAligned;
+  lsm.window_points = static_cast<std::size_t>(params.integer_or(
+      "window_points", 10, 3, static_cast<int>(localization::kMaxWindowPoints)));
+  // A period alone means time decimation only; both given means whichever comes first.
+  const bool has_period = params.has("sample_period_s");
+  const bool has_distance = params.has("sample_distance_m");
+  lsm.sample_distance_m = params.number_or("sample_distance_m",
+                                           has_period && !has_distance ? 0.0 : 0.02, 0.0, 10.0);
+  lsm.sample_period_s = params.number_or("sample_period_s", 0.0, 0.0, 10.0);
+  lsm.max_window_heading_change_rad =
+      params.number_or("max_window_heading_change_rad", 0.1, 1e-6, 3.2);
+  localization::EgConfig eg;
+  eg.heading_source = params.choice_or("heading_source", "gyro", {"gyro", "encoders"}) == "gyro"
+                          ? localization::HeadingSource::kGyro
+                          : localization::HeadingSource::kEncoders;
+  params.finish();
+  if (ctx.robot != nullptr) {
+    const GyroParams& gyro = ctx.robot->sensors.gyro;
+    if (!std::isfinite(gyro.scale) || gyro.scale == 0.0 || !std::isfinite(gyro.bias_rad_s)) {
+      throw ConfigError(ctx.robot->source_file +
+                        ": sensors.gyro: expected a finite non-zero scale and a finite bias");
+    }
+    eg.gyro_scale = gyro.scale;
+    eg.gyro_bias_radps = gyro.bias_rad_s;
+  }
+  configure(eg, lsm);
+}
+
+void LsmLocalization::configure(const localization::EgConfig& eg,
+                                const localization::LsmConfig& lsm) noexcept {
+  eg_.set_config(eg);
+  lsm_.configure(lsm);
+  eg_.reset(Pose2{});
+}
+
+void LsmLocalization::reset(const PoseEstimate& initial) {
+  eg_.reset(initial.pose);
+  lsm_.reset();
+}
+
+Status LsmLocalization::hand_over(const PoseEstimate& current) noexcept {
+  const Pose2& p = current.pose;
+  if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.yaw_rad)) {
+    last_error_ = "lsm: non-finite pose handed over";
+    return Status::kError;
+  }
+  eg_.reset(p);
+  lsm_.reset();
+  return Status::kOk;
+}
+
+Status LsmLocalization::update(const OdometryIncrement& odometry,
+                               const HardwareState& readings) noexcept {
+  if (!odometry.valid) return Status::kOk;
+  if (!eg_.step(odometry.delta, odometry.dt_s, readings.gyro_wz_radps, readings.gyro_valid)) {
+    last_error_ = "lsm: non-finite odometry increment or gyro rate";
+    return Status::kError;
+  }
+  // The loop's own time when the hardware gives none keeps period decimation working.
+  stamp_s_ = readings.stamp_s > 0.0 ? readings.stamp_s : stamp_s_ + odometry.dt_s;
+  lsm_.push(eg_.pose(), eg_.unwrapped_yaw_rad(), eg_.distance_m(), stamp_s_);
+  return Status::kOk;
+}
+
+PoseEstimate LsmLocalization::estimate() const noexcept {
+  PoseEstimate e;
+  e.pose = lsm_.output(eg_.pose());
+  e.has_covariance = false;
+  return e;
+}
+
+}  // namespace swivel::plugins
+
+SWIVEL_EXPORT_PLUGIN(swivel::plugins::LsmLocalization, swivel::Localization, "lsm")
