@@ -1,0 +1,119 @@
+#pragma once
+// Run logs (DESIGN.md "Run logs"): the CSV that the daemon records, the simulator writes
+// and every offline tool reads. One row per sample, SI units, radians.
+//
+//   # swivel-run 1
+//   # robot: <name>
+//   # drivetrain: differential | swpc
+//   # modules: <N>            (swpc only)
+//   t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw
+//
+// swpc rows carry steer_1..steer_N then wheel_1..wheel_N in place of wheel_l, wheel_r.
+// The truth columns (motion capture) are empty where a row has no sample. The command
+// columns hold the twist commanded from that row's time until the next row.
+//
+// Neither the writer nor the reader is real-time safe (they allocate and do I/O); the
+// daemon hands RunLogSample values (trivially copyable) to a writer thread.
+
+#include <array>
+#include <cstddef>
+#include <fstream>
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "swivel/robot_model.hpp"
+#include "swivel/types.hpp"
+
+namespace swivel {
+
+/// The format version this code writes and reads (`# swivel-run 1`).
+inline constexpr int kRunLogVersion = 1;
+
+/// A malformed, truncated or unreadable run log. The message starts with "file:line: "
+/// where a line is concerned, e.g. "run.csv:57: expected 12 columns, got 11".
+class RunLogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// What the comment lines declare.
+struct RunLogHeader {
+  std::string robot;
+  DrivetrainKind drivetrain = DrivetrainKind::kDifferential;
+  /// Modules whose channels are logged: 2 (left, right) for a differential robot.
+  std::size_t module_count = 2;
+  /// Other comment lines (without "# "), e.g. how a run was made. Written after the fixed
+  /// lines; the reader collects those that follow `# swivel-run` and interprets none.
+  std::vector<std::string> comments;
+};
+
+/// One row. For a differential robot wheel_rad[0] is the left and wheel_rad[1] the right
+/// wheel, and steer_rad is unused.
+struct RunLogSample {
+  double t_s = 0.0;
+  Twist2 cmd;                                   ///< commanded body twist
+  std::array<double, kMaxModules> wheel_rad{};  ///< cumulative encoder angles
+  std::array<double, kMaxModules> steer_rad{};  ///< measured steering angles (swpc)
+  double gyro_wz_radps = 0.0;
+  bool has_truth = false;  ///< a motion-capture sample belongs to this row
+  Pose2 truth;             ///< world frame; meaningful only when has_truth
+};
+
+/// A whole log in memory.
+struct RunLog {
+  std::string source;  ///< file name used in messages
+  RunLogHeader header;
+  std::vector<RunLogSample> samples;
+};
+
+/// The header row's column names for `header`, in order.
+std::vector<std::string> run_log_columns(const RunLogHeader& header);
+
+/// The header a run of `model` gets (name, drivetrain, module count).
+RunLogHeader run_log_header(const RobotModel& model);
+
+/// Streams a run log: comment lines and header row at construction, one row per write().
+/// Numbers are written in the shortest form that reads back to the same double.
+class RunLogWriter {
+ public:
+  /// Creates (truncates) `path`.
+  /// @throws RunLogError when the file cannot be opened or the header is invalid
+  ///         (module count outside 2..kMaxModules, or not 2 for a differential robot).
+  RunLogWriter(const std::string& path, const RunLogHeader& header);
+  /// Writes to a stream the caller keeps alive. @throws RunLogError as above.
+  RunLogWriter(std::ostream& out, const RunLogHeader& header);
+
+  RunLogWriter(const RunLogWriter&) = delete;
+  RunLogWriter& operator=(const RunLogWriter&) = delete;
+
+  /// Appends one row. @throws RunLogError when the stream fails.
+  void write(const RunLogSample& sample);
+  /// Flushes buffered rows. @throws RunLogError when the stream fails.
+  void flush();
+
+  [[nodiscard]] const RunLogHeader& header() const { return header_; }
+
+ private:
+  void start();
+
+  RunLogHeader header_;
+  std::ofstream file_;
+  std::ostream* out_ = nullptr;
+  std::string path_;
+  std::string line_;  // reused row buffer
+};
+
+/// Reads a run log. Unknown `#` comment lines are ignored; blank lines are skipped.
+/// @throws RunLogError naming the file and line: missing `# swivel-run` or `# drivetrain`
+///   line, unsupported version, missing or wrong header row, a row with the wrong number
+///   of columns, a cell that is not a finite number, partly empty truth columns, or time
+///   going backwards.
+RunLog read_run_log(const std::string& path);
+
+/// Parses a run log from a stream; `source_name` is used in messages.
+/// @throws RunLogError as read_run_log.
+RunLog parse_run_log(std::istream& in, const std::string& source_name);
+
+}  // namespace swivel

@@ -1,0 +1,33 @@
+// swivel-lab: the offline tools. Subcommands register themselves through commands.inc.
+
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <iostream>
+#include <string>
+
+#define SWIVEL_LAB_COMMAND(name) void add_##name##_command(CLI::App& app, int& exit_code);
+namespace swivel::lab {
+#include "commands.inc"
+}  // namespace swivel::lab
+#undef SWIVEL_LAB_COMMAND
+
+int main(int argc, char** argv) {
+  CLI::App app{"swivel-lab: offline simulation, calibration and model analysis for Swivel robots"};
+  app.require_subcommand(1);
+  int exit_code = 0;
+#define SWIVEL_LAB_COMMAND(name) swivel::lab::add_##name##_command(app, exit_code);
+#include "commands.inc"
+#undef SWIVEL_LAB_COMMAND
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::string where = "swivel-lab";
+    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    std::cerr << where << ": error: " << e.what() << '\n';
+    return 1;
+  }
+  return exit_code;
+}
