@@ -1,0 +1,120 @@
+// Bytes -> an incoming DDS sample, the way the daemon's subscriber receives it: Cyclone's
+// CDR validation (dds_stream_normalize_data) and deserialisation (dds_stream_read) with the
+// descriptors idlc generates from core/idl/, then the conversion into the loop's types.
+//
+// Input: one byte choosing the topic (VelocityCommand, MotionCapture, ROS 2 Twist), the
+// 4-byte encapsulation header of the RTPS payload, then the CDR body.
+//
+// The conversion below mirrors DdsBridge::take_commands/take_motion_capture, which have no
+// function of their own yet; once core/dds exposes one, call it here instead.
+
+#include <dds/dds.h>
+#include <dds/ddsi/ddsi_cdrstream.h>
+
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "fuzz_support.hpp"
+#include "ros2_interfaces.h"
+#include "swivel.h"
+#include "swivel/rt/state_snapshot.hpp"
+#include "swivel/types.hpp"
+
+namespace {
+
+constexpr const char* kTarget = "fuzz_dds_samples";
+constexpr const char* kRobotId = "docent";
+static_assert(std::endian::native == std::endian::little, "encapsulation handling assumes LE");
+
+// Encapsulation identifiers (RTPS 9.4.2.12, XTypes 7.6.3.1.2) as they appear on the wire.
+enum : std::uint16_t { kCdrBe = 0x0000, kCdrLe = 0x0001, kCdr2Be = 0x0006, kCdr2Le = 0x0007 };
+
+void check_command(const swivel::VelocityCommand& c, double vx, double vy, double wz) {
+  // The loop rejects non-finite twists itself; here the values must pass through bit-exact.
+  if (std::memcmp(&c.twist.vx_mps, &vx, sizeof vx) != 0 ||
+      std::memcmp(&c.twist.vy_mps, &vy, sizeof vy) != 0 ||
+      std::memcmp(&c.twist.wz_radps, &wz, sizeof wz) != 0) {
+    swivel::fuzz::contract_broken(kTarget, "command twist altered in conversion");
+  }
+}
+
+void convert(int topic, const void* sample) {
+  switch (topic) {
+    case 0: {
+      const auto& c = *static_cast<const swivel_msg_VelocityCommand*>(sample);
+      if (c.robot_id == nullptr || std::string(kRobotId) != c.robot_id) return;
+      swivel::VelocityCommand command;
+      command.twist = {c.vx_mps, c.vy_mps, c.wz_radps};
+      command.received_s = 1.0;
+      check_command(command, c.vx_mps, c.vy_mps, c.wz_radps);
+      break;
+    }
+    case 1: {
+      const auto& m = *static_cast<const swivel_msg_MotionCapture*>(sample);
+      if (m.robot_id == nullptr || std::string(kRobotId) != m.robot_id) return;
+      swivel::MotionCaptureSample s;
+      s.valid = true;
+      s.stamp_s = m.stamp_s > 0.0 ? m.stamp_s : 1.0;
+      s.pose = {m.x_m, m.y_m, m.yaw_rad};
+      if (!(s.stamp_s > 0.0) && !std::isnan(s.stamp_s)) {
+        swivel::fuzz::contract_broken(kTarget, "motion capture stamp not positive");
+      }
+      break;
+    }
+    default: {
+      const auto& t = *static_cast<const geometry_msgs_msg_dds__Twist_*>(sample);
+      swivel::VelocityCommand command;
+      command.twist = {t.linear.x, t.linear.y, t.angular.z};
+      check_command(command, t.linear.x, t.linear.y, t.angular.z);
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 5) return 0;
+  const dds_topic_descriptor_t* descriptors[] = {&swivel_msg_VelocityCommand_desc,
+                                                 &swivel_msg_MotionCapture_desc,
+                                                 &geometry_msgs_msg_dds__Twist__desc};
+  const int topic = data[0] % 3;
+  const dds_topic_descriptor_t& desc = *descriptors[topic];
+  const auto encapsulation = static_cast<std::uint16_t>((data[1] << 8) | data[2]);
+  bool swap = false;
+  std::uint32_t xcdr = 0;
+  switch (encapsulation) {
+    case kCdrBe: swap = true; xcdr = 1; break;
+    case kCdrLe: xcdr = 1; break;
+    case kCdr2Be: swap = true; xcdr = 2; break;
+    case kCdr2Le: xcdr = 2; break;
+    default: return 0;  // Cyclone refuses other encapsulations before deserialising
+  }
+  // Normalisation byte-swaps in place and the stream reads whole words: a private,
+  // 8-byte-aligned copy, as Cyclone's receive buffers are.
+  const std::size_t body = size - 5;
+  std::vector<std::uint64_t> buffer(body / 8 + 1);
+  std::memcpy(buffer.data(), data + 5, body);
+  auto* bytes = reinterpret_cast<char*>(buffer.data());
+  std::uint32_t offset = 0;
+  if (dds_stream_normalize_data(bytes, &offset, static_cast<std::uint32_t>(body), swap, xcdr,
+                                desc.m_ops) == nullptr) {
+    return 0;  // malformed: dropped by the reader
+  }
+  if (offset > body) swivel::fuzz::contract_broken(kTarget, "normalised past the end");
+
+  std::vector<std::uint64_t> storage(desc.m_size / 8 + 1, 0);
+  void* sample = storage.data();
+  dds_istream_t in;
+  dds_istream_init(&in, static_cast<std::uint32_t>(body), bytes, xcdr);
+  dds_stream_read(&in, static_cast<char*>(sample), desc.m_ops);
+  dds_istream_fini(&in);
+  convert(topic, sample);
+  dds_stream_free_sample(sample, desc.m_ops);
+  return 0;
+}
