@@ -1,0 +1,185 @@
+#pragma once
+// The real-time loop (DESIGN.md "The real-time loop"). One thread at a fixed period runs:
+// hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
+// forward -> localization update -> newest velocity command -> drivetrain inverse -> write
+// hardware -> publish a StateSnapshot -> record timing.
+//
+// Faults stop the robot in a controlled way (zero twist through inverse kinematics) and
+// the loop keeps running:
+//  - a non-finite reading, or a plugin returning kError (or a non-finite pose): mode
+//    kSafeStop with the fault latched until clear_fault() is requested and a cycle runs
+//    clean; the velocity command seen before is then discarded so that only a fresh one
+//    moves the robot again;
+//  - the newest velocity command older than command_timeout_s: mode kIdle with fault
+//    kCommandTimeout; a fresh valid command resumes;
+//  - a non-finite velocity command: rejected, mode kIdle with fault kNonFiniteCommand; a
+//    fresh valid command resumes.
+// Each fault event (not each faulty cycle) is counted and logged through RtLog.
+//
+// Threads: the loop thread (or the caller of run_cycle()) runs every plugin call. One
+// command-source thread may call push_command(), one motion-capture thread
+// push_motion_capture(), one thread (the configuration watcher) the swap pair; any thread
+// may call latest(), timing(), clear_fault(), running() and now_s().
+
+#include <atomic>
+#include <cstdint>
+#include <future>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "swivel/plugin/drivetrain.hpp"
+#include "swivel/plugin/hardware.hpp"
+#include "swivel/plugin/localization.hpp"
+#include "swivel/rt/realtime.hpp"
+#include "swivel/rt/rt_log.hpp"
+#include "swivel/rt/snapshot_buffer.hpp"
+#include "swivel/rt/spsc_ring.hpp"
+#include "swivel/rt/state_snapshot.hpp"
+#include "swivel/rt/timing_stats.hpp"
+
+namespace swivel::rt {
+
+struct LoopOptions {
+  double rate_hz = 1000.0;
+  int fifo_priority = 80;          ///< SCHED_FIFO priority where permitted
+  bool realtime = true;            ///< try SCHED_FIFO, mlockall and /dev/cpu_dma_latency
+  double command_timeout_s = 0.5;  ///< older velocity commands stop the robot
+};
+
+class ControlLoop {
+ public:
+  /// Not real-time safe. The plugins must be configured and the localization reset; they
+  /// must outlive the loop (and a swapped-in localization until it is retired).
+  /// `localization_name` is copied (truncated to ShortName).
+  /// @throws std::invalid_argument for a rate or timeout that is not finite and positive.
+  ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
+              Localization& localization, const char* localization_name);
+  /// Stops the loop if it runs.
+  ~ControlLoop();
+  ControlLoop(const ControlLoop&) = delete;
+  ControlLoop& operator=(const ControlLoop&) = delete;
+
+  /// Not real-time safe. Applies real-time settings where permitted, starts the log thread
+  /// and the loop thread, and returns one line per setting that was refused (the loop then
+  /// runs SCHED_OTHER and/or without locked memory).
+  /// @throws std::system_error when a thread cannot be created; std::logic_error when
+  ///         already running.
+  std::vector<std::string> start();
+
+  /// Not real-time safe. Stops the loop after a final cycle that commands zero velocity
+  /// (zero setpoints written to the hardware), joins the threads, releases the real-time
+  /// settings. Idempotent; does nothing when not running.
+  void stop() noexcept;
+
+  /// Any thread. Real-time safe.
+  [[nodiscard]] bool running() const noexcept { return running_.load(std::memory_order_acquire); }
+
+  /// The command-source thread only (single producer). Real-time safe. False when the ring
+  /// is full (the loop has not run for a while); the command is then dropped.
+  bool push_command(const VelocityCommand& command) noexcept;
+
+  /// The motion-capture thread only (single producer). Real-time safe. The loop hands the
+  /// newest sample to the localization as HardwareState::motion_capture when the hardware
+  /// reading carries none.
+  bool push_motion_capture(const MotionCaptureSample& sample) noexcept;
+
+  /// Any thread. Real-time safe (lock-free; retries while the loop writes). The state at the
+  /// end of the newest cycle.
+  [[nodiscard]] StateSnapshot latest() const noexcept { return snapshot_.read(); }
+
+  /// Any non-real-time thread (walks the histograms). Timing of the loop thread's cycles.
+  [[nodiscard]] TimingReport timing() const { return timing_.report(); }
+
+  /// Any thread. The histograms behind timing(), e.g. for publishing them as diagnostics.
+  [[nodiscard]] const TimingStats& timing_stats() const noexcept { return timing_; }
+
+  /// The swapping thread only. Real-time safe. Asks the loop to take `next` (configured and
+  /// reset off the loop) at its next cycle boundary; the loop calls next->hand_over() with
+  /// the outgoing estimate so that the pose is continuous. False when a swap is pending or
+  /// the previous outgoing instance has not been taken with take_retired_localization().
+  /// `name` is copied (truncated to ShortName).
+  bool request_localization_swap(Localization* next, const char* name) noexcept;
+
+  /// The swapping thread only. Real-time safe. The instance the loop let go of in the last
+  /// swap (it will never be called again: destroy and unload it), or nullptr.
+  Localization* take_retired_localization() noexcept;
+
+  /// Any thread. Real-time safe. True while a requested swap has not been taken.
+  [[nodiscard]] bool swap_pending() const noexcept {
+    return pending_localization_.load(std::memory_order_acquire) != nullptr;
+  }
+
+  /// Any thread. The localization the loop is using now. Real-time safe.
+  [[nodiscard]] Localization* active_localization() const noexcept {
+    return active_localization_.load(std::memory_order_acquire);
+  }
+
+  /// Any thread. Real-time safe. Requests leaving kSafeStop: honoured at the first cycle
+  /// without a fault (the request waits while the cause persists). Ignored when no fault
+  /// is latched.
+  void clear_fault() noexcept { clear_requested_.store(true, std::memory_order_release); }
+
+  /// Runs one cycle on the calling thread at monotonic time `now_s` (tests, benchmarks).
+  /// Real-time safe. Must not be called while the loop thread runs. Does not record timing.
+  void run_cycle(double now_s) noexcept;
+
+  /// Any thread. Real-time safe. CLOCK_MONOTONIC, seconds: the clock of `received_s`.
+  [[nodiscard]] double now_s() const noexcept { return monotonic_s(); }
+
+  /// Any thread. Real-time safe. The loop period, seconds.
+  [[nodiscard]] double period_s() const noexcept { return period_s_; }
+
+  /// The loop's log; tests may drain() it while the loop thread is not running.
+  [[nodiscard]] RtLog& log() noexcept { return log_; }
+
+ private:
+  void thread_main(std::promise<std::string>& scheduling_warning) noexcept;
+  void cycle(double now_s, bool final_stop) noexcept;
+  void take_pending_swap(double now_s) noexcept;
+  void raise_fault(FaultCode code, double now_s, const char* detail) noexcept;
+  void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
+  void write_zero_setpoints() noexcept;
+  void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
+                 double b = 0.0, double c = 0.0, double d = 0.0,
+                 const char* detail = nullptr) noexcept;
+
+  LoopOptions options_;
+  double period_s_;
+  std::int64_t period_ns_;
+  Hardware& hardware_;
+  Drivetrain& drivetrain_;
+  std::uint32_t module_count_;
+
+  // Cross-thread state.
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> clear_requested_{false};
+  std::atomic<Localization*> active_localization_;
+  std::atomic<Localization*> pending_localization_{nullptr};
+  std::atomic<Localization*> retired_localization_{nullptr};
+  ShortName pending_name_{};  // written before pending_localization_ is published
+  SpscRing<VelocityCommand, 64> commands_;
+  SpscRing<MotionCaptureSample, 64> motion_capture_;
+  SnapshotBuffer<StateSnapshot> snapshot_;
+  TimingStats timing_;
+  RtLog log_;
+
+  // Loop-thread state.
+  StateSnapshot state_{};
+  HardwareState previous_{};
+  HardwareState current_{};
+  bool has_previous_ = false;
+  ActuatorCommand setpoints_{};
+  VelocityCommand command_{};
+  bool has_command_ = false;
+  FaultCode latched_fault_ = FaultCode::kNone;    // kSafeStop cause
+  FaultCode transient_fault_ = FaultCode::kNone;  // command timeout / rejected command
+  FaultCode cycle_fault_ = FaultCode::kNone;      // latched fault raised this cycle
+
+  // Non-real-time ownership.
+  std::thread thread_;
+  CpuDmaLatencyRequest dma_latency_;
+};
+
+}  // namespace swivel::rt

@@ -1,0 +1,351 @@
+#include "swivel/rt/control_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <stdexcept>
+#include <system_error>
+
+namespace swivel::rt {
+namespace {
+
+bool finite(double v) noexcept {
+  return std::isfinite(v);
+}
+
+bool finite(const Twist2& t) noexcept {
+  return finite(t.vx_mps) && finite(t.vy_mps) && finite(t.wz_radps);
+}
+
+bool finite(const Pose2& p) noexcept {
+  return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad);
+}
+
+bool finite(const HardwareState& s) noexcept {
+  if (!finite(s.stamp_s)) return false;
+  for (std::uint32_t i = 0; i < s.module_count; ++i) {
+    if (!finite(s.wheel_angle_rad[i]) || !finite(s.steer_angle_rad[i])) return false;
+  }
+  if (s.gyro_valid && !finite(s.gyro_wz_radps)) return false;
+  if (s.motion_capture.valid &&
+      (!finite(s.motion_capture.stamp_s) || !finite(s.motion_capture.pose))) {
+    return false;
+  }
+  return true;
+}
+
+bool finite(const ActuatorCommand& c) noexcept {
+  for (std::uint32_t i = 0; i < c.module_count; ++i) {
+    if (!finite(c.wheel_rate_radps[i]) || !finite(c.steer_rate_radps[i])) return false;
+  }
+  return true;
+}
+
+bool finite(const MotionCaptureSample& m) noexcept {
+  return finite(m.stamp_s) && finite(m.pose);
+}
+
+}  // namespace
+
+ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
+                         Localization& localization, const char* localization_name)
+    : options_(options),
+      period_s_(1.0 / options.rate_hz),
+      period_ns_(std::llround(1e9 / options.rate_hz)),
+      hardware_(hardware),
+      drivetrain_(drivetrain),
+      module_count_(std::min(drivetrain.module_count(), kMaxModules)),
+      active_localization_(&localization),
+      timing_(1.0 / options.rate_hz) {
+  if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
+    throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
+                                std::to_string(options.rate_hz));
+  }
+  if (!std::isfinite(options.command_timeout_s) || options.command_timeout_s <= 0.0) {
+    throw std::invalid_argument("command timeout_s must be finite and positive, got " +
+                                std::to_string(options.command_timeout_s));
+  }
+  copy_text(localization_name, state_.localization_plugin);
+  state_.module_count = module_count_;
+  state_.estimate = localization.estimate();
+  snapshot_.write(state_);
+}
+
+ControlLoop::~ControlLoop() {
+  stop();
+}
+
+std::vector<std::string> ControlLoop::start() {
+  if (running_.load(std::memory_order_acquire)) {
+    throw std::logic_error("ControlLoop::start(): the loop is already running");
+  }
+  std::vector<std::string> warnings;
+  if (options_.realtime) {
+    if (auto w = lock_process_memory(); !w.empty()) warnings.push_back(std::move(w));
+    if (auto w = dma_latency_.acquire(0); !w.empty()) warnings.push_back(std::move(w));
+  }
+  stop_requested_.store(false, std::memory_order_release);
+  log_.start();
+  std::promise<std::string> scheduling;
+  auto scheduling_warning = scheduling.get_future();
+  running_.store(true, std::memory_order_release);
+  try {
+    thread_ = std::thread([this, &scheduling] { thread_main(scheduling); });
+  } catch (...) {
+    running_.store(false, std::memory_order_release);
+    log_.stop();
+    dma_latency_.release();
+    throw;
+  }
+  if (auto w = scheduling_warning.get(); !w.empty()) warnings.push_back(std::move(w));
+  return warnings;
+}
+
+void ControlLoop::stop() noexcept {
+  if (!thread_.joinable()) return;
+  stop_requested_.store(true, std::memory_order_release);
+  thread_.join();
+  log_.stop();
+  dma_latency_.release();
+  running_.store(false, std::memory_order_release);
+}
+
+void ControlLoop::thread_main(std::promise<std::string>& scheduling_warning) noexcept {
+  std::string warning;
+  try {
+    if (options_.realtime) warning = make_thread_fifo(options_.fifo_priority);
+  } catch (...) {
+    warning = "cannot apply SCHED_FIFO: unexpected error; running SCHED_OTHER";
+  }
+  prefault_stack();
+  scheduling_warning.set_value(std::move(warning));  // start() may return from here on
+
+  std::int64_t deadline_ns = monotonic_ns() + period_ns_;
+  while (!stop_requested_.load(std::memory_order_acquire)) {
+    sleep_until_ns(deadline_ns);
+    const std::int64_t woke_ns = monotonic_ns();
+    cycle(static_cast<double>(woke_ns) * 1e-9, false);
+    const std::int64_t end_ns = monotonic_ns();
+    const std::int64_t next_ns = deadline_ns + period_ns_;
+    const bool overrun = end_ns > next_ns;
+    timing_.record(woke_ns - deadline_ns, end_ns - woke_ns, overrun);
+    deadline_ns = next_ns;
+    if (overrun) {
+      // Skip the deadlines already missed rather than running a burst of late cycles.
+      deadline_ns += ((end_ns - next_ns) / period_ns_ + 1) * period_ns_;
+    }
+  }
+  cycle(monotonic_s(), true);
+}
+
+bool ControlLoop::push_command(const VelocityCommand& command) noexcept {
+  return commands_.try_push(command);
+}
+
+bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample) noexcept {
+  return motion_capture_.try_push(sample);
+}
+
+bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
+  if (next == nullptr) return false;
+  if (pending_localization_.load(std::memory_order_acquire) != nullptr) return false;
+  if (retired_localization_.load(std::memory_order_acquire) != nullptr) return false;
+  copy_text(name, pending_name_);
+  pending_localization_.store(next, std::memory_order_release);
+  return true;
+}
+
+Localization* ControlLoop::take_retired_localization() noexcept {
+  return retired_localization_.exchange(nullptr, std::memory_order_acq_rel);
+}
+
+void ControlLoop::log_event(LogLevel level, LogCode code, double now_s, const char* text, double a,
+                            double b, double c, double d, const char* detail) noexcept {
+  LogRecord record;
+  record.stamp_s = now_s;
+  record.cycle = state_.cycle;
+  record.level = level;
+  record.code = code;
+  record.text = text != nullptr ? text : "";
+  record.values = {a, b, c, d};
+  copy_text(detail, record.detail);
+  log_.push(record);
+}
+
+void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail) noexcept {
+  cycle_fault_ = code;
+  if (latched_fault_ == code) return;  // the same cause persisting is one event
+  latched_fault_ = code;
+  ++state_.fault_count;
+  log_event(LogLevel::kError, LogCode::kFaultRaised, now_s, "safe stop", static_cast<double>(code),
+            static_cast<double>(state_.fault_count), 0.0, 0.0, detail);
+}
+
+void ControlLoop::raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept {
+  // Every rejected command is its own event; a timeout is one event until a command arrives.
+  if (transient_fault_ == code && code == FaultCode::kCommandTimeout) return;
+  transient_fault_ = code;
+  ++state_.fault_count;
+  log_event(LogLevel::kWarn, LogCode::kFaultRaised, now_s, text, static_cast<double>(code),
+            static_cast<double>(state_.fault_count));
+}
+
+void ControlLoop::write_zero_setpoints() noexcept {
+  setpoints_ = ActuatorCommand{};
+  setpoints_.module_count = module_count_;
+}
+
+void ControlLoop::take_pending_swap(double now_s) noexcept {
+  Localization* next = pending_localization_.load(std::memory_order_acquire);
+  if (next == nullptr) return;
+  Localization* outgoing = active_localization_.load(std::memory_order_relaxed);
+  const PoseEstimate handed = outgoing->estimate();
+  const Status status = next->hand_over(handed);
+  active_localization_.exchange(next, std::memory_order_acq_rel);
+  state_.localization_plugin = pending_name_;
+  ++state_.localization_swaps;
+  // request_localization_swap() refuses while this slot is full, so it is empty here.
+  retired_localization_.store(outgoing, std::memory_order_release);
+  pending_localization_.store(nullptr, std::memory_order_release);
+  log_event(LogLevel::kInfo, LogCode::kLocalizationSwapped, now_s, "",
+            static_cast<double>(state_.localization_swaps), handed.pose.x_m, handed.pose.y_m,
+            handed.pose.yaw_rad, state_.localization_plugin.data());
+  if (status != Status::kOk) raise_fault(FaultCode::kLocalizationError, now_s, next->last_error());
+}
+
+void ControlLoop::run_cycle(double now_s) noexcept {
+  cycle(now_s, false);
+}
+
+void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
+  cycle_fault_ = FaultCode::kNone;
+  take_pending_swap(now_s);
+  Localization& localization = *active_localization_.load(std::memory_order_relaxed);
+
+  // Read and check the hardware.
+  bool reading_ok = false;
+  if (hardware_.read(now_s, current_) != Status::kOk) {
+    raise_fault(FaultCode::kHardwareError, now_s, hardware_.last_error());
+  } else if (current_.module_count > kMaxModules) {
+    raise_fault(FaultCode::kHardwareError, now_s, "module count out of range");
+  } else if (!finite(current_)) {
+    raise_fault(FaultCode::kNonFiniteSensor, now_s, nullptr);
+  } else {
+    reading_ok = true;
+  }
+
+  // Newest motion-capture sample from the external source.
+  MotionCaptureSample sample;
+  MotionCaptureSample newest_sample;
+  while (motion_capture_.try_pop(sample)) {
+    if (!sample.valid) continue;
+    if (finite(sample)) {
+      newest_sample = sample;
+    } else {
+      log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
+                "non-finite motion-capture sample dropped", sample.stamp_s);
+    }
+  }
+  if (reading_ok && newest_sample.valid && !current_.motion_capture.valid) {
+    current_.motion_capture = newest_sample;
+  }
+
+  // Odometry and localization.
+  OdometryIncrement odometry;
+  if (reading_ok && has_previous_) {
+    if (drivetrain_.forward(previous_, current_, odometry) != Status::kOk) {
+      raise_fault(FaultCode::kDrivetrainError, now_s, drivetrain_.last_error());
+    } else if (localization.update(odometry, current_) != Status::kOk) {
+      raise_fault(FaultCode::kLocalizationError, now_s, localization.last_error());
+    } else if (!finite(localization.estimate().pose)) {
+      raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose estimate");
+    }
+  }
+
+  // Leaving safe stop: only on request and only in a cycle without a fault.
+  if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
+    if (latched_fault_ != FaultCode::kNone) {
+      if (cycle_fault_ == FaultCode::kNone) {
+        log_event(LogLevel::kInfo, LogCode::kFaultCleared, now_s, "",
+                  static_cast<double>(latched_fault_));
+        latched_fault_ = FaultCode::kNone;
+        has_command_ = false;  // only a command that arrives from now on moves the robot
+      } else {
+        clear_requested_.store(true, std::memory_order_release);
+      }
+    }
+  }
+
+  // Newest velocity command.
+  VelocityCommand incoming;
+  while (commands_.try_pop(incoming)) {
+    if (finite(incoming.twist) && finite(incoming.received_s)) {
+      command_ = incoming;
+      has_command_ = true;
+      transient_fault_ = FaultCode::kNone;
+    } else {
+      has_command_ = false;
+      raise_transient_fault(FaultCode::kNonFiniteCommand, now_s, "non-finite command rejected");
+      log_event(LogLevel::kWarn, LogCode::kCommandRejected, now_s, "non-finite velocity command",
+                static_cast<double>(incoming.sequence));
+    }
+  }
+  if (has_command_ && now_s - command_.received_s > options_.command_timeout_s) {
+    has_command_ = false;
+    raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
+  }
+
+  // Command -> setpoints -> hardware.
+  Twist2 target;
+  const bool moving = !final_stop && latched_fault_ == FaultCode::kNone && has_command_;
+  if (moving) target = command_.twist;
+  Twist2 applied;
+  const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
+  bool zeroed = basis == nullptr;
+  if (basis != nullptr) {
+    if (drivetrain_.inverse(target, *basis, period_s_, setpoints_, applied) != Status::kOk) {
+      raise_fault(FaultCode::kDrivetrainError, now_s, drivetrain_.last_error());
+      zeroed = true;
+    } else if (!finite(setpoints_) || !finite(applied)) {
+      raise_fault(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
+      zeroed = true;
+    }
+  }
+  if (zeroed) {
+    write_zero_setpoints();
+    applied = Twist2{};
+    if (basis != nullptr) {
+      log_event(LogLevel::kWarn, LogCode::kZeroSetpointFallback, now_s,
+                "inverse kinematics failed: zero setpoints written");
+    }
+  }
+  if (hardware_.write(setpoints_) != Status::kOk) {
+    raise_fault(FaultCode::kHardwareError, now_s, hardware_.last_error());
+  }
+  if (reading_ok) {
+    previous_ = current_;
+    has_previous_ = true;
+  }
+
+  // Publish.
+  ++state_.cycle;
+  state_.stamp_s = now_s;
+  state_.estimate = localization.estimate();
+  state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
+  state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
+  state_.command_twist = applied;
+  state_.gyro_wz_radps = reading_ok && current_.gyro_valid ? current_.gyro_wz_radps : 0.0;
+  state_.module_count = module_count_;
+  drivetrain_.module_states(std::span<ModuleState>(state_.modules.data(), module_count_));
+  if (latched_fault_ != FaultCode::kNone) {
+    state_.mode = LoopMode::kSafeStop;
+    state_.fault = latched_fault_;
+  } else {
+    state_.mode = moving ? LoopMode::kVelocity : LoopMode::kIdle;
+    state_.fault = transient_fault_;
+  }
+  state_.has_truth = hardware_.ground_truth(state_.truth);
+  snapshot_.write(state_);
+}
+
+}  // namespace swivel::rt

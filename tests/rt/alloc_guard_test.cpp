@@ -1,0 +1,141 @@
+// Proves the loop's real-time rule "no heap operation on the loop thread" (STYLE.md): many
+// cycles with a localization hot swap, faults and a command timeout in them, counted by the
+// allocation guard armed on the loop's thread only. The negative tests prove the guard
+// would notice.
+
+#include "alloc_guard.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <thread>
+#include <vector>
+
+#include "fake_plugins.hpp"
+#include "swivel/rt/control_loop.hpp"
+
+namespace swivel::rt {
+namespace {
+
+using test::AllocCounter;
+using test::FakeDrivetrain;
+using test::FakeHardware;
+using test::FakeLocalization;
+using test::HeapCounts;
+
+constexpr int kWarmUpCycles = 1000;
+constexpr int kArmedCycles = 12000;
+constexpr int kSwapCycle = 6000;
+
+// Per thread: two threads allocate at once in CountsOnlyTheArmedThread.
+thread_local std::vector<int>* volatile t_sink = nullptr;
+
+struct Outcome {
+  HeapCounts counts;
+  StateSnapshot last;
+};
+
+// Runs the scenario on a dedicated thread, as the loop thread would, and arms the guard there.
+Outcome run_scenario(FakeLocalization& first, FakeLocalization& second, FakeHardware& hardware) {
+  FakeDrivetrain drivetrain;
+  LoopOptions options;
+  options.realtime = false;
+  ControlLoop loop(options, hardware, drivetrain, first, "fake_a");
+  Outcome outcome;
+  std::thread loop_thread([&] {
+    double now_s = 10.0;
+    std::uint64_t sequence = 0;
+    auto cycle = [&](int i, bool send_command) {
+      now_s += loop.period_s();
+      if (send_command && i % 20 == 0) {
+        VelocityCommand c;
+        c.twist = {0.3 + 0.1 * ((i / 1000) % 3), 0.0, ((i / 500) % 2) != 0 ? 0.4 : -0.2};
+        c.received_s = now_s;
+        c.sequence = ++sequence;
+        loop.push_command(c);
+      }
+      loop.run_cycle(now_s);
+    };
+    for (int i = 0; i < kWarmUpCycles; ++i) cycle(i, true);
+
+    AllocCounter counter;
+    for (int i = 0; i < kArmedCycles; ++i) {
+      if (i == kSwapCycle) loop.request_localization_swap(&second, "fake_b");
+      hardware.inject_nan = i >= 8000 && i < 8010;  // a sensor fault ...
+      if (i == 8100) loop.clear_fault();            // ... cleared
+      const bool commands = i < 9000 || i > 9700;   // a command timeout in between
+      cycle(i, commands);
+      if (i == kSwapCycle + 1) (void)loop.take_retired_localization();
+    }
+    outcome.counts = counter.counts();
+  });
+  loop_thread.join();
+  outcome.last = loop.latest();
+  return outcome;
+}
+
+TEST(LoopAllocations, NoHeapOperationsOnTheLoopThreadAcrossASwap) {
+  FakeHardware hardware;
+  FakeLocalization first;
+  FakeLocalization second;
+  const Outcome outcome = run_scenario(first, second, hardware);
+
+  EXPECT_EQ(outcome.counts.allocations, 0U)
+      << "first allocation: " << outcome.counts.first_allocation_bytes << " bytes";
+  EXPECT_EQ(outcome.counts.deallocations, 0U);
+  // The scenario really went through its paths.
+  EXPECT_EQ(outcome.last.cycle, static_cast<std::uint64_t>(kWarmUpCycles + kArmedCycles));
+  EXPECT_EQ(outcome.last.localization_swaps, 1U);
+  EXPECT_STREQ(outcome.last.localization_plugin.data(), "fake_b");
+  EXPECT_EQ(outcome.last.fault_count, 2U);  // the sensor fault and the command timeout
+  EXPECT_EQ(outcome.last.mode, LoopMode::kVelocity);
+  EXPECT_GT(second.updates.load(), 5000U);
+}
+
+TEST(LoopAllocations, GuardCatchesAPluginThatAllocates) {
+  FakeHardware hardware;
+  FakeLocalization first;
+  FakeLocalization second;
+  second.allocate_in_update = true;  // planted: a vector growing in update()
+  const Outcome outcome = run_scenario(first, second, hardware);
+  EXPECT_GE(outcome.counts.allocations, static_cast<std::uint64_t>(kArmedCycles - kSwapCycle));
+  EXPECT_GT(outcome.counts.first_allocation_bytes, 0U);
+}
+
+TEST(LoopAllocations, GuardCatchesAPluginThatCallsMalloc) {
+  if (!test::malloc_is_counted()) GTEST_SKIP() << "malloc is not counted in sanitizer builds";
+  FakeHardware hardware;
+  FakeLocalization first;
+  FakeLocalization second;
+  second.malloc_in_update = true;
+  const Outcome outcome = run_scenario(first, second, hardware);
+  // One malloc and one free per update() after the swap (a few faulty cycles skip update()).
+  EXPECT_GE(outcome.counts.allocations, static_cast<std::uint64_t>(kArmedCycles - kSwapCycle) / 2);
+  EXPECT_GE(outcome.counts.deallocations,
+            static_cast<std::uint64_t>(kArmedCycles - kSwapCycle) / 2);
+  EXPECT_EQ(outcome.counts.first_allocation_bytes, 64U);
+}
+
+TEST(AllocCounter, CountsOnlyTheArmedThread) {
+  HeapCounts armed;
+  std::thread other([] {
+    for (int i = 0; i < 100; ++i) {
+      t_sink = new std::vector<int>(16);
+      delete t_sink;
+    }
+  });
+  std::thread counted([&] {
+    AllocCounter counter;
+    t_sink = new std::vector<int>(16);  // two allocations: the vector and its storage
+    delete t_sink;
+    armed = counter.counts();
+  });
+  other.join();
+  counted.join();
+  EXPECT_EQ(armed.allocations, 2U);
+  EXPECT_EQ(armed.deallocations, 2U);
+  EXPECT_EQ(armed.first_allocation_bytes, sizeof(std::vector<int>));
+}
+
+}  // namespace
+}  // namespace swivel::rt

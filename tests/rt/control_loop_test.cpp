@@ -1,0 +1,348 @@
+#include "swivel/rt/control_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+#include "fake_plugins.hpp"
+
+namespace swivel::rt {
+namespace {
+
+using test::FakeDrivetrain;
+using test::FakeHardware;
+using test::FakeLocalization;
+using test::kFakeWheelRadiusM;
+
+constexpr double kDtS = 0.001;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+LoopOptions test_options() {
+  LoopOptions o;
+  o.rate_hz = 1000.0;
+  o.realtime = false;
+  o.command_timeout_s = 0.5;
+  return o;
+}
+
+// Drives the loop with run_cycle() on synthetic time: deterministic, no threads.
+class LoopRig {
+ public:
+  explicit LoopRig(const LoopOptions& options = test_options())
+      : loop(std::make_unique<ControlLoop>(options, hardware, drivetrain, localization, "fake_a")) {
+  }
+
+  void command(double vx_mps, double wz_radps) {
+    VelocityCommand c;
+    c.twist = {vx_mps, 0.0, wz_radps};
+    c.received_s = t_s;
+    c.sequence = ++sequence;
+    ASSERT_TRUE(loop->push_command(c));
+  }
+  void step(int cycles = 1) {
+    for (int i = 0; i < cycles; ++i) {
+      t_s += kDtS;
+      loop->run_cycle(t_s);
+    }
+  }
+  // Cycles with a fresh command every 10 ms, as a 100 Hz command source would send.
+  void drive(double vx_mps, double wz_radps, int cycles) {
+    for (int i = 0; i < cycles; ++i) {
+      if (i % 10 == 0) command(vx_mps, wz_radps);
+      step();
+    }
+  }
+  [[nodiscard]] StateSnapshot state() const { return loop->latest(); }
+  [[nodiscard]] bool wheels_stopped() const {
+    return hardware.last_left_radps.load() == 0.0 && hardware.last_right_radps.load() == 0.0;
+  }
+
+  FakeHardware hardware;
+  FakeDrivetrain drivetrain;
+  FakeLocalization localization;
+  std::unique_ptr<ControlLoop> loop;
+  double t_s = 100.0;
+  std::uint64_t sequence = 0;
+};
+
+double planar_distance(const Pose2& a, const Pose2& b) {
+  return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m);
+}
+
+TEST(ControlLoop, RejectsNonPositiveRate) {
+  FakeHardware hw;
+  FakeDrivetrain dt;
+  FakeLocalization loc;
+  LoopOptions o = test_options();
+  o.rate_hz = 0.0;
+  try {
+    ControlLoop loop(o, hw, dt, loc, "fake");
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rate_hz must be finite and positive"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ControlLoop, StartsIdleWithoutCommand) {
+  LoopRig rig;
+  rig.step(5);
+  const StateSnapshot s = rig.state();
+  EXPECT_EQ(s.cycle, 5U);
+  EXPECT_EQ(s.mode, LoopMode::kIdle);
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_TRUE(rig.wheels_stopped());
+  EXPECT_STREQ(s.localization_plugin.data(), "fake_a");
+  EXPECT_EQ(s.module_count, 2U);
+}
+
+TEST(ControlLoop, FollowsCommandAndEstimatesPose) {
+  LoopRig rig;
+  rig.drive(0.5, 0.0, 200);
+  const StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kVelocity);
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_DOUBLE_EQ(s.command_twist.vx_mps, 0.5);
+  EXPECT_DOUBLE_EQ(rig.hardware.last_left_radps.load(), 0.5 / kFakeWheelRadiusM);
+  // The first cycle only writes the setpoint; 199 cycles of motion follow it.
+  EXPECT_NEAR(s.estimate.pose.x_m, 0.5 * 0.199, 1e-9);
+  ASSERT_TRUE(s.has_truth);
+  EXPECT_NEAR(planar_distance(s.estimate.pose, s.truth), 0.0, 1e-9);
+  EXPECT_NEAR(s.odometry_twist.vx_mps, 0.5, 1e-9);
+  EXPECT_NEAR(s.modules[0].wheel_rate_cmd_radps, 5.0, 1e-12);
+}
+
+TEST(ControlLoop, CommandTimeoutStopsRobotAndReportsFault) {
+  LoopRig rig;
+  rig.command(0.4, 0.2);
+  rig.step(499);  // newest command 0.499 s old: still valid
+  EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
+  EXPECT_FALSE(rig.wheels_stopped());
+
+  rig.step(2);  // 0.501 s old
+  StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kIdle);
+  EXPECT_EQ(s.fault, FaultCode::kCommandTimeout);
+  EXPECT_EQ(s.fault_count, 1U);
+  EXPECT_EQ(s.command_twist.vx_mps, 0.0);
+  EXPECT_EQ(s.command_twist.wz_radps, 0.0);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.step(100);  // a persisting timeout is one fault event
+  EXPECT_EQ(rig.state().fault_count, 1U);
+
+  rig.command(0.1, 0.0);
+  rig.step();
+  s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kVelocity);
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_DOUBLE_EQ(s.command_twist.vx_mps, 0.1);
+}
+
+TEST(ControlLoop, NonFiniteCommandIsRejectedAndStopsRobot) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 20);
+  VelocityCommand bad;
+  bad.twist = {kNaN, 0.0, 0.0};
+  bad.received_s = rig.t_s;
+  ASSERT_TRUE(rig.loop->push_command(bad));
+  rig.step();
+  StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kIdle);
+  EXPECT_EQ(s.fault, FaultCode::kNonFiniteCommand);
+  EXPECT_EQ(s.fault_count, 1U);
+  EXPECT_TRUE(rig.wheels_stopped());
+  EXPECT_TRUE(std::isfinite(rig.hardware.last_left_radps.load()));
+
+  rig.command(0.2, 0.0);
+  rig.step();
+  s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kVelocity);
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+}
+
+TEST(ControlLoop, NonFiniteSensorSafeStopsWithinOneCycle) {
+  LoopRig rig;
+  rig.drive(0.5, 0.3, 100);
+  const Pose2 before = rig.state().estimate.pose;
+  rig.hardware.inject_nan = true;
+  rig.command(0.5, 0.3);
+  rig.step();
+  StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kSafeStop);
+  EXPECT_EQ(s.fault, FaultCode::kNonFiniteSensor);
+  EXPECT_EQ(s.fault_count, 1U);
+  EXPECT_TRUE(rig.wheels_stopped());
+  EXPECT_EQ(s.command_twist.vx_mps, 0.0);
+  // The bad reading never reached the localization.
+  EXPECT_TRUE(std::isfinite(s.estimate.pose.x_m));
+  EXPECT_NEAR(planar_distance(s.estimate.pose, before), 0.0, 1e-12);
+
+  rig.drive(0.5, 0.3, 50);  // the fault persists: one event, still stopped
+  EXPECT_EQ(rig.state().fault_count, 1U);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.hardware.inject_nan = false;  // cause gone, but nobody cleared: stays stopped
+  rig.drive(0.5, 0.3, 50);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kNonFiniteSensor);
+  EXPECT_TRUE(rig.wheels_stopped());
+}
+
+TEST(ControlLoop, PluginErrorSafeStopsUntilClearedAndHealthy) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 50);
+  rig.localization.fail_update = true;
+  rig.drive(0.3, 0.0, 10);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kLocalizationError);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.loop->clear_fault();  // requested while the plugin still fails: must wait
+  rig.drive(0.3, 0.0, 10);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.localization.fail_update = false;
+  rig.step();  // the pending request is honoured in the first healthy cycle
+  StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kIdle);  // commands from before the clear are discarded
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_EQ(s.fault_count, 1U);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.command(0.3, 0.0);
+  rig.step();
+  EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
+  EXPECT_FALSE(rig.wheels_stopped());
+}
+
+TEST(ControlLoop, DrivetrainAndHardwareErrorsSafeStop) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 20);
+  rig.drivetrain.fail_forward = true;
+  rig.drive(0.3, 0.0, 1);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kDrivetrainError);
+  EXPECT_TRUE(rig.wheels_stopped());
+  rig.drivetrain.fail_forward = false;
+
+  rig.hardware.fail_read = true;
+  const auto writes = rig.hardware.writes.load();
+  rig.drive(0.3, 0.0, 1);
+  EXPECT_EQ(rig.state().fault, FaultCode::kHardwareError);
+  EXPECT_EQ(rig.state().fault_count, 2U);
+  EXPECT_EQ(rig.hardware.writes.load(), writes + 1);  // zero setpoints still written
+  EXPECT_TRUE(rig.wheels_stopped());
+}
+
+TEST(ControlLoop, ClearRequestedWhileHealthyDoesNotClearALaterFault) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 10);
+  rig.loop->clear_fault();
+  rig.step();
+  rig.hardware.inject_nan = true;
+  rig.step();
+  rig.hardware.inject_nan = false;
+  rig.drive(0.3, 0.0, 20);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kNonFiniteSensor);
+}
+
+TEST(ControlLoop, HotSwapKeepsPoseContinuousAndCountsSwap) {
+  LoopRig rig;
+  FakeLocalization next;
+  next.reset(PoseEstimate{Pose2{5.0, -3.0, 1.0}, {}, false});  // deliberately elsewhere
+  rig.drive(0.5, 0.4, 300);
+  const StateSnapshot before = rig.state();
+  const auto old_updates = rig.localization.updates.load();
+
+  ASSERT_TRUE(rig.loop->request_localization_swap(&next, "fake_b"));
+  EXPECT_TRUE(rig.loop->swap_pending());
+  EXPECT_FALSE(rig.loop->request_localization_swap(&rig.localization, "fake_a"));  // pending
+  rig.drive(0.5, 0.4, 1);
+  const StateSnapshot after = rig.state();
+
+  EXPECT_EQ(after.localization_swaps, 1U);
+  EXPECT_STREQ(after.localization_plugin.data(), "fake_b");
+  EXPECT_EQ(next.hand_overs.load(), 1U);
+  EXPECT_EQ(rig.loop->active_localization(), &next);
+  EXPECT_FALSE(rig.loop->swap_pending());
+  // One cycle at 0.5 m/s moves 0.5 mm: anything more is a jump.
+  EXPECT_LE(planar_distance(after.estimate.pose, before.estimate.pose), 0.5 * kDtS + 1e-9);
+  EXPECT_NEAR(after.estimate.pose.yaw_rad, before.estimate.pose.yaw_rad, 0.4 * kDtS + 1e-9);
+  EXPECT_NEAR(planar_distance(after.estimate.pose, after.truth), 0.0, 1e-9);
+
+  // The old instance is released exactly once and never called again.
+  EXPECT_FALSE(rig.loop->request_localization_swap(&rig.localization, "fake_a"));  // not taken
+  EXPECT_EQ(rig.loop->take_retired_localization(), &rig.localization);
+  EXPECT_EQ(rig.loop->take_retired_localization(), nullptr);
+  rig.drive(0.5, 0.4, 100);
+  EXPECT_EQ(rig.localization.updates.load(), old_updates);
+  EXPECT_NEAR(planar_distance(rig.state().estimate.pose, rig.state().truth), 0.0, 1e-9);
+  EXPECT_EQ(rig.state().fault, FaultCode::kNone);
+}
+
+TEST(ControlLoop, HandsMotionCaptureToLocalization) {
+  LoopRig rig;
+  MotionCaptureSample sample;
+  sample.valid = true;
+  sample.stamp_s = rig.t_s;
+  sample.pose = {1.25, 0.0, 0.0};
+  rig.step();
+  ASSERT_TRUE(rig.loop->push_motion_capture(sample));
+  rig.step();
+  EXPECT_DOUBLE_EQ(rig.localization.last_motion_capture_x_m.load(), 1.25);
+
+  sample.pose.x_m = kNaN;  // dropped, not a stop
+  ASSERT_TRUE(rig.loop->push_motion_capture(sample));
+  rig.step();
+  EXPECT_DOUBLE_EQ(rig.localization.last_motion_capture_x_m.load(), 1.25);
+  EXPECT_EQ(rig.state().fault, FaultCode::kNone);
+}
+
+TEST(ControlLoopThread, RunsAndStopsWithZeroSetpoints) {
+  FakeHardware hardware;
+  FakeDrivetrain drivetrain;
+  FakeLocalization localization;
+  ControlLoop loop(test_options(), hardware, drivetrain, localization, "fake_a");
+  const auto warnings = loop.start();
+  EXPECT_TRUE(warnings.empty());  // realtime: false asks for nothing that can be refused
+  EXPECT_TRUE(loop.running());
+  EXPECT_THROW(loop.start(), std::logic_error);
+
+  // Keep commanding until the loop reports following it (generous deadline: loaded CI).
+  std::uint64_t sequence = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < give_up) {
+    VelocityCommand c;
+    c.twist = {0.2, 0.0, 0.1};
+    c.received_s = loop.now_s();
+    c.sequence = ++sequence;
+    loop.push_command(c);
+    const StateSnapshot s = loop.latest();
+    if (s.mode == LoopMode::kVelocity && s.cycle > 20) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_EQ(loop.latest().mode, LoopMode::kVelocity);
+  EXPECT_NE(hardware.last_left_radps.load(), 0.0);
+
+  loop.stop();
+  EXPECT_FALSE(loop.running());
+  EXPECT_EQ(hardware.last_left_radps.load(), 0.0);
+  EXPECT_EQ(hardware.last_right_radps.load(), 0.0);
+  const TimingReport timing = loop.timing();
+  EXPECT_GT(timing.cycles, 20U);
+  EXPECT_GE(timing.lateness_max_us, timing.lateness_p50_us);
+  loop.stop();  // idempotent
+  EXPECT_FALSE(loop.running());
+}
+
+}  // namespace
+}  // namespace swivel::rt
