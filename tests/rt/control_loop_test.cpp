@@ -223,6 +223,23 @@ TEST(ControlLoop, PluginErrorSafeStopsUntilClearedAndHealthy) {
   EXPECT_FALSE(rig.wheels_stopped());
 }
 
+TEST(ControlLoop, ThrowingPluginSafeStopsInsteadOfTerminating) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 50);
+  rig.localization.throw_in_update = true;
+  rig.drive(0.3, 0.0, 5);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kLocalizationError);
+  EXPECT_TRUE(rig.wheels_stopped());
+
+  rig.localization.throw_in_update = false;
+  rig.loop->clear_fault();
+  rig.step();
+  rig.command(0.3, 0.0);
+  rig.step();
+  EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
+}
+
 TEST(ControlLoop, DrivetrainAndHardwareErrorsSafeStop) {
   LoopRig rig;
   rig.drive(0.3, 0.0, 20);

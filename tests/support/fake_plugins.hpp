@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "swivel/plugin/drivetrain.hpp"
@@ -140,6 +141,7 @@ class FakeLocalization final : public Localization {
   std::atomic<bool> fail_update{false};         ///< update() returns kError
   std::atomic<bool> allocate_in_update{false};  ///< update() grows a vector (a planted bug)
   std::atomic<bool> malloc_in_update{false};    ///< update() calls malloc/free directly
+  std::atomic<bool> throw_in_update{false};     ///< update() throws (a plugin breaking the rules)
 
   void configure(const PluginContext&) override {}
   void reset(const PoseEstimate& initial) override { estimate_ = initial; }
@@ -154,9 +156,12 @@ class FakeLocalization final : public Localization {
     return Status::kOk;
   }
 
-  Status update(const OdometryIncrement& odometry,
-                const HardwareState& readings) noexcept override {
+  // Not noexcept: this fake can break the rule on purpose (throw_in_update).
+  Status update(const OdometryIncrement& odometry, const HardwareState& readings) override {
     updates.fetch_add(1, std::memory_order_relaxed);
+    if (throw_in_update.load(std::memory_order_relaxed)) {
+      throw std::runtime_error("fake localization threw");
+    }
     if (readings.motion_capture.valid) {
       last_motion_capture_x_m.store(readings.motion_capture.pose.x_m, std::memory_order_relaxed);
     }

@@ -190,6 +190,19 @@ void ControlLoop::raise_transient_fault(FaultCode code, double now_s, const char
             static_cast<double>(state_.fault_count));
 }
 
+// Plugins must not throw on the loop; one that does anyway is stopped at this boundary and
+// its exception becomes a fault with a controlled stop rather than std::terminate.
+template <class Call>
+Status ControlLoop::guarded(Call&& call, const char*& thrown) noexcept {
+  thrown = nullptr;
+  try {
+    return call();
+  } catch (...) {
+    thrown = "plugin threw an exception on the real-time loop";
+    return Status::kError;
+  }
+}
+
 void ControlLoop::write_zero_setpoints() noexcept {
   setpoints_ = ActuatorCommand{};
   setpoints_.module_count = module_count_;
@@ -200,7 +213,8 @@ void ControlLoop::take_pending_swap(double now_s) noexcept {
   if (next == nullptr) return;
   Localization* outgoing = active_localization_.load(std::memory_order_relaxed);
   const PoseEstimate handed = outgoing->estimate();
-  const Status status = next->hand_over(handed);
+  const char* thrown = nullptr;
+  const Status status = guarded([&] { return next->hand_over(handed); }, thrown);
   active_localization_.exchange(next, std::memory_order_acq_rel);
   state_.localization_plugin = pending_name_;
   ++state_.localization_swaps;
@@ -210,7 +224,9 @@ void ControlLoop::take_pending_swap(double now_s) noexcept {
   log_event(LogLevel::kInfo, LogCode::kLocalizationSwapped, now_s, "",
             static_cast<double>(state_.localization_swaps), handed.pose.x_m, handed.pose.y_m,
             handed.pose.yaw_rad, state_.localization_plugin.data());
-  if (status != Status::kOk) raise_fault(FaultCode::kLocalizationError, now_s, next->last_error());
+  if (status != Status::kOk) {
+    raise_fault(FaultCode::kLocalizationError, now_s, thrown != nullptr ? thrown : next->last_error());
+  }
 }
 
 void ControlLoop::run_cycle(double now_s) noexcept {
@@ -224,8 +240,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
 
   // Read and check the hardware.
   bool reading_ok = false;
-  if (hardware_.read(now_s, current_) != Status::kOk) {
-    raise_fault(FaultCode::kHardwareError, now_s, hardware_.last_error());
+  const char* thrown = nullptr;
+  if (guarded([&] { return hardware_.read(now_s, current_); }, thrown) != Status::kOk) {
+    raise_fault(FaultCode::kHardwareError, now_s, thrown != nullptr ? thrown : hardware_.last_error());
   } else if (current_.module_count > kMaxModules) {
     raise_fault(FaultCode::kHardwareError, now_s, "module count out of range");
   } else if (!finite(current_)) {
@@ -253,10 +270,14 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   // Odometry and localization.
   OdometryIncrement odometry;
   if (reading_ok && has_previous_) {
-    if (drivetrain_.forward(previous_, current_, odometry) != Status::kOk) {
-      raise_fault(FaultCode::kDrivetrainError, now_s, drivetrain_.last_error());
-    } else if (localization.update(odometry, current_) != Status::kOk) {
-      raise_fault(FaultCode::kLocalizationError, now_s, localization.last_error());
+    if (guarded([&] { return drivetrain_.forward(previous_, current_, odometry); }, thrown) !=
+        Status::kOk) {
+      raise_fault(FaultCode::kDrivetrainError, now_s,
+                  thrown != nullptr ? thrown : drivetrain_.last_error());
+    } else if (guarded([&] { return localization.update(odometry, current_); }, thrown) !=
+               Status::kOk) {
+      raise_fault(FaultCode::kLocalizationError, now_s,
+                  thrown != nullptr ? thrown : localization.last_error());
     } else if (!finite(localization.estimate().pose)) {
       raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose estimate");
     }
@@ -303,8 +324,10 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
   bool zeroed = basis == nullptr;
   if (basis != nullptr) {
-    if (drivetrain_.inverse(target, *basis, period_s_, setpoints_, applied) != Status::kOk) {
-      raise_fault(FaultCode::kDrivetrainError, now_s, drivetrain_.last_error());
+    if (guarded([&] { return drivetrain_.inverse(target, *basis, period_s_, setpoints_, applied); },
+                thrown) != Status::kOk) {
+      raise_fault(FaultCode::kDrivetrainError, now_s,
+                  thrown != nullptr ? thrown : drivetrain_.last_error());
       zeroed = true;
     } else if (!finite(setpoints_) || !finite(applied)) {
       raise_fault(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
@@ -319,8 +342,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
                 "inverse kinematics failed: zero setpoints written");
     }
   }
-  if (hardware_.write(setpoints_) != Status::kOk) {
-    raise_fault(FaultCode::kHardwareError, now_s, hardware_.last_error());
+  if (guarded([&] { return hardware_.write(setpoints_); }, thrown) != Status::kOk) {
+    raise_fault(FaultCode::kHardwareError, now_s, thrown != nullptr ? thrown : hardware_.last_error());
   }
   if (reading_ok) {
     previous_ = current_;

@@ -1,4 +1,9 @@
 #pragma once
+// Real-time methods of the plugin interfaces (read, write, forward, inverse, update,
+// hand_over) must not allocate or throw; implementations declare them noexcept. The base
+// declarations are not noexcept so that a faulty plugin that throws anyway is caught at
+// the host's boundary and becomes a fault with a controlled stop instead of a crash.
+//
 // The one C entry point every plugin library exports. The host dlopen()s a library, looks
 // up `swivel_plugin_descriptor`, and checks abi_version (first field, always) and kind
 // before calling anything else. Bump kSwivelPluginAbiVersion whenever a plugin interface

@@ -21,12 +21,12 @@ class Drivetrain {
 
   /// Real-time safe. Odometry between two consecutive readings.
   virtual Status forward(const HardwareState& previous, const HardwareState& current,
-                         OdometryIncrement& out) noexcept = 0;
+                         OdometryIncrement& out) = 0;
 
   /// Real-time safe. Setpoints for body twist `command` at the current module state,
   /// desaturated to the configured limits; `applied` receives the twist actually commanded.
   virtual Status inverse(const Twist2& command, const HardwareState& current, double dt_s,
-                         ActuatorCommand& out, Twist2& applied) noexcept = 0;
+                         ActuatorCommand& out, Twist2& applied) = 0;
 
   /// Real-time safe. Per-module state after the last inverse()/forward() (size module_count()).
   virtual void module_states(std::span<ModuleState> out) const noexcept = 0;

@@ -17,10 +17,10 @@ class Hardware {
 
   /// Real-time safe. Fills `out` with the readings at monotonic time `stamp_s`.
   /// A simulated robot advances its world to `stamp_s` under the last written command.
-  virtual Status read(double stamp_s, HardwareState& out) noexcept = 0;
+  virtual Status read(double stamp_s, HardwareState& out) = 0;
 
   /// Real-time safe. Applies setpoints until the next write.
-  virtual Status write(const ActuatorCommand& command) noexcept = 0;
+  virtual Status write(const ActuatorCommand& command) = 0;
 
   /// Real-time safe. The true pose where the hardware knows it (simulation), else false.
   virtual bool ground_truth(Pose2& /*out*/) const noexcept { return false; }

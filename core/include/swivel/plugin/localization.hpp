@@ -22,10 +22,10 @@ class Localization {
   /// Real-time safe. Called by the loop at the cycle it takes this instance in a hot swap,
   /// with the outgoing instance's estimate at that cycle, so that the pose is continuous.
   /// Overwrites pose (and covariance when `current` has one) without allocating.
-  virtual Status hand_over(const PoseEstimate& current) noexcept = 0;
+  virtual Status hand_over(const PoseEstimate& current) = 0;
 
   /// Real-time safe. One cycle: the drivetrain's odometry and this cycle's readings.
-  virtual Status update(const OdometryIncrement& odometry, const HardwareState& readings) noexcept = 0;
+  virtual Status update(const OdometryIncrement& odometry, const HardwareState& readings) = 0;
 
   /// Real-time safe. The current output.
   [[nodiscard]] virtual PoseEstimate estimate() const noexcept = 0;

@@ -140,6 +140,8 @@ class ControlLoop {
   void raise_fault(FaultCode code, double now_s, const char* detail) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
+  template <class Call>
+  static Status guarded(Call&& call, const char*& thrown) noexcept;
   void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
                  double b = 0.0, double c = 0.0, double d = 0.0,
                  const char* detail = nullptr) noexcept;
