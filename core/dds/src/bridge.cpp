@@ -1,0 +1,443 @@
+#include "swivel/dds/bridge.hpp"
+
+#include <spdlog/spdlog.h>
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
+
+#include "ros2_interfaces.h"
+#include "swivel.h"
+#include "swivel/dds/topics.hpp"
+
+namespace swivel::dds {
+
+namespace {
+
+// Same names as swivel::fault_code_name (core runtime); kept here so that the bridge does
+// not pull in the real-time runtime.
+const char* fault_text(FaultCode code) {
+  switch (code) {
+    case FaultCode::kNone: return "none";
+    case FaultCode::kCommandTimeout: return "command_timeout";
+    case FaultCode::kNonFiniteCommand: return "non_finite_command";
+    case FaultCode::kNonFiniteSensor: return "non_finite_sensor";
+    case FaultCode::kHardwareError: return "hardware_error";
+    case FaultCode::kDrivetrainError: return "drivetrain_error";
+    case FaultCode::kLocalizationError: return "localization_error";
+    case FaultCode::kCalibrationError: return "calibration_error";
+  }
+  return "unknown";
+}
+
+swivel_msg_LoopMode to_msg(LoopMode mode) {
+  switch (mode) {
+    case LoopMode::kIdle: return swivel_msg_LOOP_MODE_IDLE;
+    case LoopMode::kVelocity: return swivel_msg_LOOP_MODE_VELOCITY;
+    case LoopMode::kCalibration: return swivel_msg_LOOP_MODE_CALIBRATION;
+    case LoopMode::kSafeStop: return swivel_msg_LOOP_MODE_SAFE_STOP;
+  }
+  return swivel_msg_LOOP_MODE_SAFE_STOP;
+}
+
+swivel_msg_TimingStats to_msg(const TimingPercentiles& p) {
+  return {p.p50_us, p.p99_us, p.p999_us, p.max_us};
+}
+
+char* c_str(const std::string& s) { return const_cast<char*>(s.c_str()); }
+
+constexpr std::uint32_t kTakeBatch = 16;
+
+// Takes every available sample of `reader` and calls `fn(sample, info)` for the valid ones.
+template <typename Sample, typename Fn>
+void take_all(dds_entity_t reader, Fn&& fn) {
+  std::array<void*, kTakeBatch> samples{};
+  std::array<dds_sample_info_t, kTakeBatch> infos{};
+  for (;;) {
+    samples[0] = nullptr;  // ask Cyclone to loan the samples
+    const dds_return_t n = dds_take(reader, samples.data(), infos.data(), kTakeBatch, kTakeBatch);
+    if (n <= 0) return;
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (infos[i].valid_data) fn(*static_cast<const Sample*>(samples[i]));
+    }
+    dds_return_loan(reader, samples.data(), n);
+    if (n < static_cast<dds_return_t>(kTakeBatch)) return;
+  }
+}
+
+}  // namespace
+
+void yaw_to_quaternion(double yaw_rad, double& x, double& y, double& z, double& w) noexcept {
+  x = 0.0;
+  y = 0.0;
+  z = std::sin(0.5 * yaw_rad);
+  w = std::cos(0.5 * yaw_rad);
+}
+
+struct DdsBridge::Entities {
+  // Without dds.config, CYCLONEDDS_URI decides; without either, Swivel's loopback-only file
+  // (never Cyclone's defaults, which would send discovery out of every interface).
+  explicit Entities(const DdsOptions& options)
+      : participant({options.domain_id,
+                     options.config_uri.empty() ? tool_config_uri() : options.config_uri}) {}
+
+  Participant participant;
+  dds_entity_t state_writer = 0;
+  dds_entity_t modules_writer = 0;
+  dds_entity_t diagnostics_writer = 0;
+  dds_entity_t calibration_writer = 0;
+  dds_entity_t odom_writer = 0;  ///< ROS 2, 0 when disabled
+  dds_entity_t command_reader = 0;
+  dds_entity_t motion_capture_reader = 0;
+  dds_entity_t request_reader = 0;
+  dds_entity_t cmd_vel_reader = 0;  ///< ROS 2, 0 when disabled
+  dds_entity_t waitset = 0;
+
+  std::mutex wake_mutex;
+  std::condition_variable_any wake;
+};
+
+DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbacks callbacks)
+    : options_(options), robot_id_(std::move(robot_id)), callbacks_(std::move(callbacks)) {
+  if (robot_id_.empty()) throw std::invalid_argument("DdsBridge: empty robot id");
+  if (!callbacks_.read_state) throw std::invalid_argument("DdsBridge: read_state is required");
+
+  dds_ = std::make_unique<Entities>(options_);
+  const dds_entity_t pp = dds_->participant.handle();
+  const QosPtr writer_qos = default_qos(options_.history_depth);
+  // Readers keep a little more so that a burst of commands is not collapsed.
+  const QosPtr reader_qos = default_qos(10);
+
+  auto writer = [&](const dds_topic_descriptor_t* desc, const std::string& name,
+                    const dds_qos_t* qos) {
+    const dds_entity_t topic = create_topic(pp, desc, name.c_str());
+    return check(dds_create_writer(pp, topic, qos, nullptr),
+                 ("dds_create_writer(" + name + ")").c_str());
+  };
+  auto reader = [&](const dds_topic_descriptor_t* desc, const std::string& name,
+                    const dds_qos_t* qos) {
+    const dds_entity_t topic = create_topic(pp, desc, name.c_str());
+    return check(dds_create_reader(pp, topic, qos, nullptr),
+                 ("dds_create_reader(" + name + ")").c_str());
+  };
+
+  dds_->state_writer = writer(&swivel_msg_RobotState_desc, kRobotStateTopic, writer_qos.get());
+  dds_->modules_writer =
+      writer(&swivel_msg_ModuleStates_desc, kModuleStatesTopic, writer_qos.get());
+  dds_->diagnostics_writer =
+      writer(&swivel_msg_Diagnostics_desc, kDiagnosticsTopic, writer_qos.get());
+  dds_->calibration_writer =
+      writer(&swivel_msg_CalibrationResult_desc, kCalibrationResultTopic, writer_qos.get());
+  dds_->command_reader =
+      reader(&swivel_msg_VelocityCommand_desc, kVelocityCommandTopic, reader_qos.get());
+  dds_->motion_capture_reader =
+      reader(&swivel_msg_MotionCapture_desc, kMotionCaptureTopic, reader_qos.get());
+  dds_->request_reader = reader(&swivel_msg_Request_desc, kRequestTopic, reader_qos.get());
+  if (options_.ros2.enabled) {
+    dds_->odom_writer = writer(&nav_msgs_msg_dds__Odometry__desc, options_.ros2.odom_topic(),
+                               writer_qos.get());
+    // Best effort so that teleop tools with either reliability match.
+    const QosPtr cmd_vel_qos = best_effort_qos(10);
+    dds_->cmd_vel_reader = reader(&geometry_msgs_msg_dds__Twist__desc,
+                                  options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
+  }
+
+  dds_->waitset = check(dds_create_waitset(pp), "dds_create_waitset");
+  for (const dds_entity_t r : {dds_->command_reader, dds_->motion_capture_reader,
+                               dds_->request_reader, dds_->cmd_vel_reader}) {
+    if (r == 0) continue;
+    const dds_entity_t condition =
+        check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
+    check(dds_waitset_attach(dds_->waitset, condition, r), "dds_waitset_attach");
+  }
+}
+
+DdsBridge::~DdsBridge() { stop(); }
+
+void DdsBridge::start() {
+  if (publisher_.joinable() || subscriber_.joinable()) {
+    throw std::logic_error("DdsBridge::start called twice");
+  }
+  publisher_ = std::jthread([this](const std::stop_token& stop) { publish_loop(stop); });
+  subscriber_ = std::jthread([this](const std::stop_token& stop) { subscribe_loop(stop); });
+}
+
+void DdsBridge::stop() noexcept {
+  if (subscriber_.joinable()) {
+    subscriber_.request_stop();
+    dds_waitset_set_trigger(dds_->waitset, true);
+    subscriber_.join();
+  }
+  if (publisher_.joinable()) {
+    publisher_.request_stop();
+    dds_->wake.notify_all();
+    publisher_.join();
+  }
+}
+
+BridgeCounters DdsBridge::counters() const {
+  BridgeCounters c;
+  c.states_published = states_published_.load();
+  c.commands_received = commands_received_.load();
+  c.commands_dropped = commands_dropped_.load();
+  c.commands_ignored = commands_ignored_.load();
+  c.motion_captures_received = motion_captures_received_.load();
+  c.requests_received = requests_received_.load();
+  return c;
+}
+
+void DdsBridge::publish_loop(const std::stop_token& stop) {
+  using Clock = std::chrono::steady_clock;  // CLOCK_MONOTONIC on Linux
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / options_.publish_rate_hz));
+  const auto diagnostics_period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / options_.diagnostics_rate_hz));
+  auto next = Clock::now();
+  auto next_diagnostics = next;
+  std::uint64_t last_cycle = 0;
+  bool have_last = false;
+  bool warned = false;
+  StateSnapshot snapshot;
+
+  std::unique_lock lock(dds_->wake_mutex);
+  while (!stop.stop_requested()) {
+    try {
+      // Publish only new cycles: a stalled loop shows as a gap, not as repeated samples.
+      if (callbacks_.read_state(snapshot) && (!have_last || snapshot.cycle != last_cycle)) {
+        publish_state(snapshot);
+        last_cycle = snapshot.cycle;
+        have_last = true;
+      }
+      if (callbacks_.read_diagnostics && Clock::now() >= next_diagnostics) {
+        publish_diagnostics(callbacks_.read_diagnostics());
+        next_diagnostics += diagnostics_period;
+        if (next_diagnostics < Clock::now()) next_diagnostics = Clock::now() + diagnostics_period;
+      }
+    } catch (const std::exception& e) {
+      if (!warned) spdlog::warn("dds: publishing failed: {}", e.what());
+      warned = true;
+    }
+    next += period;
+    // After a long stall, restart the schedule instead of bursting to catch up.
+    if (next < Clock::now()) next = Clock::now() + period;
+    dds_->wake.wait_until(lock, stop, next, [] { return false; });
+  }
+}
+
+void DdsBridge::publish_state(const StateSnapshot& s) {
+  std::array<char, sizeof(ShortName) + 1> plugin{};
+  std::copy(s.localization_plugin.begin(), s.localization_plugin.end(), plugin.begin());
+
+  swivel_msg_RobotState state{};
+  state.robot_id = c_str(robot_id_);
+  state.cycle = s.cycle;
+  state.stamp_s = s.stamp_s;
+  state.x_m = s.estimate.pose.x_m;
+  state.y_m = s.estimate.pose.y_m;
+  state.yaw_rad = s.estimate.pose.yaw_rad;
+  state.has_covariance = s.estimate.has_covariance;
+  std::copy(s.estimate.covariance.begin(), s.estimate.covariance.end(), state.pose_covariance);
+  state.vx_mps = s.odometry_twist.vx_mps;
+  state.vy_mps = s.odometry_twist.vy_mps;
+  state.wz_radps = s.odometry_twist.wz_radps;
+  state.cmd_vx_mps = s.command_twist.vx_mps;
+  state.cmd_vy_mps = s.command_twist.vy_mps;
+  state.cmd_wz_radps = s.command_twist.wz_radps;
+  state.gyro_wz_radps = s.gyro_wz_radps;
+  state.odometry_residual = s.odometry_residual;
+  state.localization_plugin = plugin.data();
+  state.localization_swaps = s.localization_swaps;
+  state.mode = to_msg(s.mode);
+  state.fault_code = static_cast<std::uint16_t>(s.fault);
+  state.fault_text = const_cast<char*>(fault_text(s.fault));
+  state.fault_count = s.fault_count;
+  state.has_truth = s.has_truth;
+  state.truth_x_m = s.truth.x_m;
+  state.truth_y_m = s.truth.y_m;
+  state.truth_yaw_rad = s.truth.yaw_rad;
+  check(dds_write(dds_->state_writer, &state), "dds_write(robot state)");
+  states_published_.fetch_add(1, std::memory_order_relaxed);
+
+  std::array<swivel_msg_ModuleState, kMaxModules> module_buffer{};
+  const std::uint32_t count = std::min(s.module_count, kMaxModules);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    module_buffer[i] = {s.modules[i].steer_angle_rad, s.modules[i].steer_rate_cmd_radps,
+                        s.modules[i].wheel_rate_cmd_radps, s.modules[i].wheel_rate_meas_radps};
+  }
+  swivel_msg_ModuleStates modules{};
+  modules.robot_id = c_str(robot_id_);
+  modules.cycle = s.cycle;
+  modules.stamp_s = s.stamp_s;
+  modules.modules._maximum = kMaxModules;
+  modules.modules._length = count;
+  modules.modules._buffer = module_buffer.data();
+  modules.modules._release = false;
+  check(dds_write(dds_->modules_writer, &modules), "dds_write(module states)");
+
+  if (dds_->odom_writer != 0) {
+    // ROS 2 stamps are system (Unix) time: carry the snapshot's age over to it.
+    timespec real{};
+    clock_gettime(CLOCK_REALTIME, &real);
+    const double age_s = std::max(0.0, monotonic_now_s() - s.stamp_s);
+    const double stamp = static_cast<double>(real.tv_sec) +
+                         1e-9 * static_cast<double>(real.tv_nsec) - age_s;
+    const double sec = std::floor(stamp);
+
+    nav_msgs_msg_dds__Odometry_ odom{};
+    odom.header.stamp.sec = static_cast<std::int32_t>(sec);
+    odom.header.stamp.nanosec =
+        std::min(999999999u, static_cast<std::uint32_t>((stamp - sec) * 1e9));
+    odom.header.frame_id = c_str(options_.ros2.odom_frame_id);
+    odom.child_frame_id = c_str(options_.ros2.base_frame_id);
+    odom.pose.pose.position.x = s.estimate.pose.x_m;
+    odom.pose.pose.position.y = s.estimate.pose.y_m;
+    auto& q = odom.pose.pose.orientation;
+    yaw_to_quaternion(s.estimate.pose.yaw_rad, q.x, q.y, q.z, q.w);
+    if (s.estimate.has_covariance) {
+      // (x, y, yaw) of the planar estimate sit at rows/columns (0, 1, 5) of ROS's 6x6.
+      constexpr std::array<int, 3> kIndex{0, 1, 5};
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          odom.pose.covariance[kIndex[r] * 6 + kIndex[c]] = s.estimate.covariance[r * 3 + c];
+        }
+      }
+    }
+    odom.twist.twist.linear.x = s.odometry_twist.vx_mps;
+    odom.twist.twist.linear.y = s.odometry_twist.vy_mps;
+    odom.twist.twist.angular.z = s.odometry_twist.wz_radps;
+    check(dds_write(dds_->odom_writer, &odom), "dds_write(odom)");
+  }
+}
+
+void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
+  swivel_msg_Diagnostics msg{};
+  msg.robot_id = c_str(robot_id_);
+  msg.stamp_s = monotonic_now_s();
+  msg.uptime_s = d.uptime_s;
+  msg.loop_rate_hz = d.loop_rate_hz;
+  msg.measured_rate_hz = d.measured_rate_hz;
+  msg.lateness = to_msg(d.lateness);
+  msg.cycle_time = to_msg(d.cycle_time);
+  msg.cycles = d.cycles;
+  msg.overruns = d.overruns;
+  msg.fault_count = d.fault_count;
+  msg.fault_code = static_cast<std::uint16_t>(d.fault);
+  msg.fault_text = const_cast<char*>(fault_text(d.fault));
+  msg.commands_received = commands_received_.load(std::memory_order_relaxed);
+  msg.commands_dropped = commands_dropped_.load(std::memory_order_relaxed);
+  msg.hardware_plugin = c_str(d.hardware_plugin);
+  msg.drivetrain_plugin = c_str(d.drivetrain_plugin);
+  msg.localization_plugin = c_str(d.localization_plugin);
+  msg.reload_count = d.reload_count;
+  msg.last_reload_ok = d.last_reload_ok;
+  msg.last_reload_result = c_str(d.last_reload_result);
+  msg.restart_required = d.restart_required;
+  check(dds_write(dds_->diagnostics_writer, &msg), "dds_write(diagnostics)");
+}
+
+void DdsBridge::publish_calibration(const CalibrationSample& sample) {
+  std::array<swivel_msg_ModuleCalibration, kMaxModules> buffer{};
+  const std::size_t count = std::min<std::size_t>(sample.modules.size(), kMaxModules);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto& m = sample.modules[i];
+    buffer[i] = {m.x_m,       m.y_m,       m.delta_rad,       m.d_m,       m.r_m,
+                 m.sigma_x_m, m.sigma_y_m, m.sigma_delta_rad, m.sigma_d_m, m.sigma_r_m};
+  }
+  swivel_msg_CalibrationResult msg{};
+  msg.robot_id = c_str(robot_id_);
+  msg.stamp_s = monotonic_now_s();
+  msg.status = c_str(sample.status);
+  msg.progress = sample.progress;
+  msg.text = c_str(sample.text);
+  msg.modules._maximum = kMaxModules;
+  msg.modules._length = static_cast<std::uint32_t>(count);
+  msg.modules._buffer = buffer.data();
+  msg.modules._release = false;
+  check(dds_write(dds_->calibration_writer, &msg), "dds_write(calibration result)");
+}
+
+void DdsBridge::subscribe_loop(const std::stop_token& stop) {
+  std::array<dds_attach_t, 8> triggered{};
+  while (!stop.stop_requested()) {
+    const dds_return_t n =
+        dds_waitset_wait(dds_->waitset, triggered.data(), triggered.size(), DDS_MSECS(200));
+    if (n < 0) {
+      spdlog::warn("dds: waitset failed: {}", dds_strretcode(n));
+      return;
+    }
+    try {
+      take_commands();
+      take_ros2_commands();
+      take_motion_capture();
+      take_requests();
+    } catch (const std::exception& e) {
+      spdlog::warn("dds: command handling failed: {}", e.what());
+    }
+  }
+}
+
+void DdsBridge::deliver_command(const Twist2& twist) {
+  VelocityCommand command;
+  command.twist = twist;
+  command.received_s = monotonic_now_s();
+  command.sequence = ++next_command_sequence_;
+  if (callbacks_.on_command && callbacks_.on_command(command)) {
+    commands_received_.fetch_add(1, std::memory_order_relaxed);
+  } else {
+    commands_dropped_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void DdsBridge::take_commands() {
+  take_all<swivel_msg_VelocityCommand>(
+      dds_->command_reader, [this](const swivel_msg_VelocityCommand& c) {
+        if (c.robot_id == nullptr || robot_id_ != c.robot_id) {
+          commands_ignored_.fetch_add(1, std::memory_order_relaxed);
+          return;
+        }
+        deliver_command({c.vx_mps, c.vy_mps, c.wz_radps});
+      });
+}
+
+void DdsBridge::take_ros2_commands() {
+  if (dds_->cmd_vel_reader == 0) return;
+  // ROS 2 topics are per robot through their namespace: no robot id to check.
+  take_all<geometry_msgs_msg_dds__Twist_>(
+      dds_->cmd_vel_reader, [this](const geometry_msgs_msg_dds__Twist_& t) {
+        deliver_command({t.linear.x, t.linear.y, t.angular.z});
+      });
+}
+
+void DdsBridge::take_motion_capture() {
+  take_all<swivel_msg_MotionCapture>(
+      dds_->motion_capture_reader, [this](const swivel_msg_MotionCapture& m) {
+        if (m.robot_id == nullptr || robot_id_ != m.robot_id) return;
+        MotionCaptureSample sample;
+        sample.valid = true;
+        sample.stamp_s = m.stamp_s > 0.0 ? m.stamp_s : monotonic_now_s();
+        sample.pose = {m.x_m, m.y_m, m.yaw_rad};
+        if (callbacks_.on_motion_capture && callbacks_.on_motion_capture(sample)) {
+          motion_captures_received_.fetch_add(1, std::memory_order_relaxed);
+        }
+      });
+}
+
+void DdsBridge::take_requests() {
+  take_all<swivel_msg_Request>(dds_->request_reader, [this](const swivel_msg_Request& r) {
+    if (r.robot_id == nullptr || robot_id_ != r.robot_id) return;
+    requests_received_.fetch_add(1, std::memory_order_relaxed);
+    if (!callbacks_.on_request) return;
+    RequestSample sample;
+    sample.verb = r.verb != nullptr ? r.verb : "";
+    sample.argument = r.argument != nullptr ? r.argument : "";
+    sample.sequence_number = r.sequence_number;
+    callbacks_.on_request(sample);
+  });
+}
+
+}  // namespace swivel::dds

@@ -1,0 +1,99 @@
+#include "swivel/dds/topics.hpp"
+
+#include <time.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <set>
+
+namespace swivel::dds {
+
+dds_return_t check(dds_return_t rc, const char* what) {
+  if (rc < 0) {
+    throw DdsError(std::string(what) + ": " + dds_strretcode(rc));
+  }
+  return rc;
+}
+
+namespace {
+
+QosPtr make_qos(int depth, dds_reliability_kind_t reliability) {
+  QosPtr qos(dds_create_qos());
+  dds_qset_reliability(qos.get(), reliability, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, depth < 1 ? 1 : (depth > 100 ? 100 : depth));
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  const dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
+  dds_qset_data_representation(qos.get(), 1, &xcdr1);
+  return qos;
+}
+
+// Cyclone refuses to create a domain twice in one process; the first creator's
+// configuration holds for every later participant of that domain in this process.
+void ensure_domain(std::uint32_t domain_id, const std::string& config_uri) {
+  static std::mutex mutex;
+  static std::set<std::uint32_t> created;
+  const std::scoped_lock lock(mutex);
+  if (created.contains(domain_id)) return;
+  const dds_entity_t domain = dds_create_domain(domain_id, config_uri.c_str());
+  if (domain < 0 && domain != DDS_RETCODE_PRECONDITION_NOT_MET) {
+    check(domain, ("dds_create_domain(" + config_uri + ")").c_str());
+  }
+  // Kept for the life of the process: deleting it would delete other users' participants.
+  created.insert(domain_id);
+}
+
+bool is_under(const std::filesystem::path& path, const std::filesystem::path& dir) {
+  const auto rel = path.lexically_relative(dir);
+  return !rel.empty() && *rel.begin() != "..";
+}
+
+std::string loopback_path() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec && is_under(exe, SWIVEL_DDS_BUILD_DIR)) return SWIVEL_DDS_SOURCE_LOOPBACK;
+  return SWIVEL_DDS_INSTALLED_LOOPBACK;
+}
+
+}  // namespace
+
+QosPtr default_qos(int depth) { return make_qos(depth, DDS_RELIABILITY_RELIABLE); }
+
+QosPtr best_effort_qos(int depth) { return make_qos(depth, DDS_RELIABILITY_BEST_EFFORT); }
+
+Participant::Participant(const ParticipantOptions& options) {
+  if (!options.config_uri.empty()) ensure_domain(options.domain_id, options.config_uri);
+  handle_ = check(dds_create_participant(options.domain_id, nullptr, nullptr),
+                  "dds_create_participant");
+}
+
+Participant::~Participant() {
+  if (handle_ > 0) dds_delete(handle_);
+}
+
+std::string tool_config_uri() {
+  const char* env = std::getenv("CYCLONEDDS_URI");
+  if (env != nullptr && *env != '\0') return "";
+  return "file://" + loopback_path();
+}
+
+std::string describe_tool_config() {
+  const char* env = std::getenv("CYCLONEDDS_URI");
+  if (env != nullptr && *env != '\0') return std::string("CYCLONEDDS_URI=") + env;
+  return "file://" + loopback_path() + " (CYCLONEDDS_URI unset)";
+}
+
+double monotonic_now_s() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+dds_entity_t create_topic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
+                          const char* name) {
+  return check(dds_create_topic(participant, descriptor, name, nullptr, nullptr),
+               (std::string("dds_create_topic(") + name + ")").c_str());
+}
+
+}  // namespace swivel::dds

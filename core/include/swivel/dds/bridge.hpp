@@ -1,0 +1,158 @@
+#pragma once
+// The daemon's DDS side. A publisher thread reads the loop's newest state snapshot at the
+// publish rate and writes RobotState, ModuleStates (and ROS 2 odometry when enabled); it
+// writes Diagnostics at the diagnostics rate. A subscriber thread waits on the command
+// readers and hands each accepted sample to a callback, which the daemon wires into the
+// loop's lock-free rings. The bridge knows nothing of the loop beyond these callbacks.
+//
+// Thread safety: the callbacks run on the bridge's threads (read_state and
+// read_diagnostics on the publisher thread, the others on the subscriber thread), never on
+// the caller's. Nothing here is real-time safe.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "swivel/dds/options.hpp"
+#include "swivel/rt/state_snapshot.hpp"
+#include "swivel/types.hpp"
+
+namespace swivel::dds {
+
+/// Percentiles of one timing histogram, microseconds.
+struct TimingPercentiles {
+  double p50_us = 0.0;
+  double p99_us = 0.0;
+  double p999_us = 0.0;
+  double max_us = 0.0;
+};
+
+/// What the daemon reports as Diagnostics (the bridge adds robot id, stamp and its own
+/// command counters).
+struct DiagnosticsSample {
+  double uptime_s = 0.0;
+  double loop_rate_hz = 0.0;        ///< configured
+  double measured_rate_hz = 0.0;    ///< over the daemon's last window
+  TimingPercentiles lateness;       ///< wake-up lateness, us
+  TimingPercentiles cycle_time;     ///< cycle execution time, us
+  std::uint64_t cycles = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t fault_count = 0;
+  FaultCode fault = FaultCode::kNone;
+  std::string hardware_plugin;
+  std::string drivetrain_plugin;
+  std::string localization_plugin;
+  std::uint32_t reload_count = 0;   ///< configuration reloads attempted
+  bool last_reload_ok = true;
+  std::string last_reload_result;   ///< "" before the first reload
+  bool restart_required = false;    ///< a changed setting needs a restart
+};
+
+/// A request addressed to this robot (Request topic).
+struct RequestSample {
+  std::string verb;      ///< "reload", later "calibrate"
+  std::string argument;  ///< verb-specific, "" when none
+  std::uint64_t sequence_number = 0;
+};
+
+/// Calibrated geometry of one module with one-sigma uncertainties.
+struct ModuleCalibrationSample {
+  double x_m = 0.0, y_m = 0.0, delta_rad = 0.0, d_m = 0.0, r_m = 0.0;
+  double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_delta_rad = 0.0, sigma_d_m = 0.0,
+         sigma_r_m = 0.0;
+};
+
+/// Progress or result of a calibration run (CalibrationResult topic).
+struct CalibrationSample {
+  std::string status;  ///< idle | running | done | failed | cancelled
+  double progress = 0.0;
+  std::string text;
+  std::vector<ModuleCalibrationSample> modules;  ///< at most kMaxModules
+};
+
+/// How the bridge reaches the daemon. Only read_state is required.
+struct DdsCallbacks {
+  /// Copies the loop's newest snapshot into the argument; false when there is none yet.
+  std::function<bool(StateSnapshot&)> read_state{};
+  /// A velocity command for this robot, with received_s set to the reception time
+  /// (CLOCK_MONOTONIC). Return false when it could not be queued (counted as dropped).
+  std::function<bool(const VelocityCommand&)> on_command{};
+  /// A motion-capture sample for this robot (stamp_s on the daemon's CLOCK_MONOTONIC).
+  std::function<bool(const MotionCaptureSample&)> on_motion_capture{};
+  /// The loop's health; when empty, no Diagnostics are published.
+  std::function<DiagnosticsSample()> read_diagnostics{};
+  /// A request ("reload", ...) for this robot.
+  std::function<void(const RequestSample&)> on_request{};
+};
+
+/// Counters of the bridge's own work, for diagnostics and tests.
+struct BridgeCounters {
+  std::uint64_t states_published = 0;
+  std::uint64_t commands_received = 0;   ///< accepted by on_command
+  std::uint64_t commands_dropped = 0;    ///< rejected by on_command, or no callback
+  std::uint64_t commands_ignored = 0;    ///< addressed to another robot
+  std::uint64_t motion_captures_received = 0;
+  std::uint64_t requests_received = 0;
+};
+
+class DdsBridge {
+ public:
+  /// Creates the participant, topics, writers and readers (nothing runs yet).
+  /// @param robot_id  the key of every sample this daemon writes and accepts
+  /// @throws DdsError when DDS refuses an entity; std::invalid_argument when robot_id is
+  ///         empty or read_state is missing.
+  DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbacks callbacks);
+  /// Stops the threads and deletes every DDS entity.
+  ~DdsBridge();
+  DdsBridge(const DdsBridge&) = delete;
+  DdsBridge& operator=(const DdsBridge&) = delete;
+
+  /// Starts the publisher and subscriber threads. Call once.
+  void start();
+  /// Stops and joins both threads. Idempotent.
+  void stop() noexcept;
+
+  /// Writes one CalibrationResult now (any thread). @throws DdsError
+  void publish_calibration(const CalibrationSample& sample);
+
+  [[nodiscard]] BridgeCounters counters() const;
+  [[nodiscard]] const std::string& robot_id() const { return robot_id_; }
+  [[nodiscard]] const DdsOptions& options() const { return options_; }
+
+ private:
+  struct Entities;
+
+  void publish_loop(const std::stop_token& stop);
+  void subscribe_loop(const std::stop_token& stop);
+  void publish_state(const StateSnapshot& snapshot);
+  void publish_diagnostics(const DiagnosticsSample& sample);
+  void take_commands();
+  void take_ros2_commands();
+  void take_motion_capture();
+  void take_requests();
+  void deliver_command(const Twist2& twist);
+
+  DdsOptions options_;
+  std::string robot_id_;
+  DdsCallbacks callbacks_;
+  std::unique_ptr<Entities> dds_;
+  std::jthread publisher_;
+  std::jthread subscriber_;
+
+  std::atomic<std::uint64_t> states_published_{0};
+  std::atomic<std::uint64_t> commands_received_{0};
+  std::atomic<std::uint64_t> commands_dropped_{0};
+  std::atomic<std::uint64_t> commands_ignored_{0};
+  std::atomic<std::uint64_t> motion_captures_received_{0};
+  std::atomic<std::uint64_t> requests_received_{0};
+  std::uint64_t next_command_sequence_ = 0;  ///< subscriber thread only
+};
+
+/// Fills a ROS 2 style quaternion (x, y, z, w) for a rotation of `yaw_rad` about z.
+void yaw_to_quaternion(double yaw_rad, double& x, double& y, double& z, double& w) noexcept;
+
+}  // namespace swivel::dds

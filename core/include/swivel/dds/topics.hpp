@@ -1,0 +1,86 @@
+#pragma once
+// Topic names, default QoS and participant creation shared by the daemon's bridge, swivelctl
+// and the tests. Types are the C types idlc generates from core/idl/swivel.idl ("swivel.h")
+// and core/idl/ros2/ros2_interfaces.idl ("ros2_interfaces.h"). None of this is real-time
+// safe: DDS calls belong on the bridge's own threads.
+
+#include <dds/dds.h>
+
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace swivel::dds {
+
+inline constexpr const char* kRobotStateTopic = "swivel_robot_state";
+inline constexpr const char* kModuleStatesTopic = "swivel_module_states";
+inline constexpr const char* kDiagnosticsTopic = "swivel_diagnostics";
+inline constexpr const char* kCalibrationResultTopic = "swivel_calibration_result";
+inline constexpr const char* kVelocityCommandTopic = "swivel_velocity_command";
+inline constexpr const char* kMotionCaptureTopic = "swivel_motion_capture";
+inline constexpr const char* kRequestTopic = "swivel_command";
+
+/// A DDS call failed; the message names the call and Cyclone's return code.
+class DdsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Throws DdsError("<what>: <dds_strretcode>") when `rc` is negative; returns `rc` otherwise.
+dds_return_t check(dds_return_t rc, const char* what);
+
+struct QosDeleter {
+  void operator()(dds_qos_t* qos) const noexcept { dds_delete_qos(qos); }
+};
+using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
+
+/// Swivel's default QoS: reliable, keep-last `depth` (clamped to 1..100), volatile, and
+/// plain CDR (XCDR1) so that ROS 2 and other XCDR1-only peers interoperate.
+QosPtr default_qos(int depth = 1);
+
+/// As default_qos but best-effort: used for readers of streamed commands (ROS 2 cmd_vel)
+/// so that both best-effort and reliable writers match.
+QosPtr best_effort_qos(int depth = 1);
+
+/// The participant's domain and Cyclone configuration.
+struct ParticipantOptions {
+  std::uint32_t domain_id = 0;
+  /// Cyclone configuration: a "file://" URI or XML. Empty: use CYCLONEDDS_URI (or Cyclone's
+  /// defaults when unset).
+  std::string config_uri;
+};
+
+/// A DDS domain participant, deleted (with every entity under it) on destruction.
+class Participant {
+ public:
+  /// @throws DdsError when the domain or the participant cannot be created.
+  explicit Participant(const ParticipantOptions& options);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  [[nodiscard]] dds_entity_t handle() const { return handle_; }
+
+ private:
+  dds_entity_t handle_ = 0;
+};
+
+/// The configuration a command-line tool should use: CYCLONEDDS_URI when set, otherwise
+/// the loopback configuration shipped with Swivel (the source tree's
+/// config/dds/loopback.xml for a binary in the build tree, the installed
+/// <sysconfdir>/swivel/dds/loopback.xml otherwise). Returns "" when CYCLONEDDS_URI is set,
+/// meaning "let Cyclone read it".
+std::string tool_config_uri();
+
+/// Human-readable description of what tool_config_uri() picks, for --help and errors.
+std::string describe_tool_config();
+
+/// CLOCK_MONOTONIC in seconds: the clock of the real-time loop and of every stamp_s.
+double monotonic_now_s() noexcept;
+
+/// Creates a topic of `descriptor` named `name`. @throws DdsError
+dds_entity_t create_topic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
+                          const char* name);
+
+}  // namespace swivel::dds

@@ -1,0 +1,228 @@
+// swivel-bench-dds: how old is the robot state when a client on the same host gets it?
+//
+// A server process runs the DdsBridge over a synthetic 1 kHz loop (each snapshot stamped
+// with CLOCK_MONOTONIC at its cycle) and echoes pings; this process measures
+//   age   = client receive time - snapshot stamp   (publish-rate sampling included)
+//   floor = one-way DDS latency, half the round trip of a ping-pong with the same QoS
+// and prints p50/p99 of both, with the target: age p99 <= publish period + 2 * floor p99.
+
+#include <CLI/CLI.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "swivel.h"
+#include "swivel/dds/bridge.hpp"
+#include "swivel/dds/topics.hpp"
+
+namespace swivel::dds {
+namespace {
+
+constexpr const char* kPingTopic = "swivel_bench_ping";
+constexpr const char* kPongTopic = "swivel_bench_pong";
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const auto i = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
+  return v[std::min(i, v.size() - 1)];
+}
+
+dds_entity_t make_reader(dds_entity_t pp, const dds_topic_descriptor_t* d, const char* name) {
+  const QosPtr qos = default_qos(10);
+  return check(dds_create_reader(pp, create_topic(pp, d, name), qos.get(), nullptr), "reader");
+}
+
+dds_entity_t make_writer(dds_entity_t pp, const dds_topic_descriptor_t* d, const char* name) {
+  const QosPtr qos = default_qos(10);
+  return check(dds_create_writer(pp, create_topic(pp, d, name), qos.get(), nullptr), "writer");
+}
+
+bool matched(dds_entity_t writer) {
+  dds_publication_matched_status_t s{};
+  return dds_get_publication_matched_status(writer, &s) == 0 && s.current_count > 0;
+}
+
+// Server: the bridge over a synthetic loop, and a pong for every ping.
+int run_server(const std::string& robot, double rate_hz) {
+  signal(SIGTERM, on_signal);
+  signal(SIGINT, on_signal);
+  std::mutex mutex;
+  StateSnapshot latest;
+  std::jthread loop([&](const std::stop_token& stop) {
+    auto next = std::chrono::steady_clock::now();
+    std::uint64_t cycle = 0;
+    while (!stop.stop_requested()) {
+      next += std::chrono::milliseconds(1);
+      std::this_thread::sleep_until(next);
+      const std::scoped_lock lock(mutex);
+      latest.cycle = ++cycle;
+      latest.stamp_s = monotonic_now_s();
+    }
+  });
+  DdsOptions options;
+  options.publish_rate_hz = rate_hz;
+  options.config_uri = tool_config_uri();  // loopback unless CYCLONEDDS_URI says otherwise
+  DdsBridge bridge(options, robot, {.read_state = [&](StateSnapshot& s) {
+                     const std::scoped_lock lock(mutex);
+                     s = latest;
+                     return s.cycle > 0;
+                   }});
+  Participant pp({0, tool_config_uri()});
+  const dds_entity_t ping = make_reader(pp.handle(), &swivel_msg_VelocityCommand_desc, kPingTopic);
+  const dds_entity_t pong = make_writer(pp.handle(), &swivel_msg_VelocityCommand_desc, kPongTopic);
+  const dds_entity_t waitset = dds_create_waitset(pp.handle());
+  dds_waitset_attach(waitset, dds_create_readcondition(ping, DDS_ANY_STATE), 0);
+  bridge.start();
+  while (!g_stop) {
+    if (dds_waitset_wait(waitset, nullptr, 0, DDS_MSECS(100)) <= 0) continue;
+    void* samples[16] = {nullptr};
+    dds_sample_info_t infos[16];
+    const dds_return_t n = dds_take(ping, samples, infos, 16, 16);
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (infos[i].valid_data) dds_write(pong, samples[i]);
+    }
+    if (n > 0) dds_return_loan(ping, samples, n);
+  }
+  bridge.stop();
+  return 0;
+}
+
+int run_client(const std::string& robot, double rate_hz, double seconds, int pings) {
+  const pid_t child = fork();
+  if (child == 0) {
+    const std::string rate = std::to_string(rate_hz);
+    execl("/proc/self/exe", "swivel-bench-dds", "--server", "--robot", robot.c_str(),
+          "--rate-hz", rate.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  Participant pp({0, tool_config_uri()});
+  const dds_entity_t state = make_reader(pp.handle(), &swivel_msg_RobotState_desc, kRobotStateTopic);
+  const dds_entity_t ping = make_writer(pp.handle(), &swivel_msg_VelocityCommand_desc, kPingTopic);
+  const dds_entity_t pong = make_reader(pp.handle(), &swivel_msg_VelocityCommand_desc, kPongTopic);
+  auto finish = [&](int code) {
+    kill(child, SIGTERM);
+    waitpid(child, nullptr, 0);
+    return code;
+  };
+
+  // Age of the state at this client.
+  std::vector<double> ages_us;
+  const dds_entity_t ws = dds_create_waitset(pp.handle());
+  dds_waitset_attach(ws, dds_create_readcondition(state, DDS_ANY_STATE), 0);
+  const double deadline_first = monotonic_now_s() + 10.0;
+  double end = 0.0;
+  while (end == 0.0 || monotonic_now_s() < end) {
+    if (end == 0.0 && monotonic_now_s() > deadline_first) {
+      std::fprintf(stderr, "swivel-bench-dds: no state from the server within 10 s\n");
+      return finish(1);
+    }
+    if (dds_waitset_wait(ws, nullptr, 0, DDS_MSECS(100)) <= 0) continue;
+    void* samples[16] = {nullptr};
+    dds_sample_info_t infos[16];
+    const dds_return_t n = dds_take(state, samples, infos, 16, 16);
+    const double now = monotonic_now_s();
+    for (dds_return_t i = 0; i < n; ++i) {
+      const auto* s = static_cast<const swivel_msg_RobotState*>(samples[i]);
+      if (!infos[i].valid_data || robot != s->robot_id) continue;
+      if (end == 0.0) {
+        end = now + seconds;  // the first sample starts the measurement window
+        continue;
+      }
+      ages_us.push_back(1e6 * (now - s->stamp_s));
+    }
+    if (n > 0) dds_return_loan(state, samples, n);
+  }
+
+  // Floor: ping-pong with the same QoS between the same two processes.
+  const double match_deadline = monotonic_now_s() + 10.0;
+  while (!matched(ping) && monotonic_now_s() < match_deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const dds_entity_t pong_ws = dds_create_waitset(pp.handle());
+  dds_waitset_attach(pong_ws, dds_create_readcondition(pong, DDS_ANY_STATE), 0);
+  std::vector<double> one_way_us;
+  std::string id = "bench";
+  swivel_msg_VelocityCommand msg{};
+  msg.robot_id = id.data();
+  for (int i = 0; i < pings + 50; ++i) {
+    msg.sequence_number = static_cast<std::uint64_t>(i);
+    msg.stamp_s = monotonic_now_s();
+    dds_write(ping, &msg);
+    bool got = false;
+    while (!got) {
+      if (dds_waitset_wait(pong_ws, nullptr, 0, DDS_SECS(2)) <= 0) break;
+      void* samples[4] = {nullptr};
+      dds_sample_info_t infos[4];
+      const dds_return_t n = dds_take(pong, samples, infos, 4, 4);
+      const double now = monotonic_now_s();
+      for (dds_return_t k = 0; k < n; ++k) {
+        const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
+        if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {
+          got = true;
+          if (i >= 50) one_way_us.push_back(0.5e6 * (now - p->stamp_s));  // skip warm-up
+        }
+      }
+      if (n > 0) dds_return_loan(pong, samples, n);
+    }
+    if (!got) {
+      std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", i);
+      return finish(1);
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+
+  const double period_us = 1e6 / rate_hz;
+  const double age_p50 = percentile(ages_us, 0.50), age_p99 = percentile(ages_us, 0.99);
+  const double floor_p50 = percentile(one_way_us, 0.50), floor_p99 = percentile(one_way_us, 0.99);
+  const double target_us = period_us + 2.0 * floor_p99;
+  std::printf("state age at client (%zu samples at %.0f Hz, 1 kHz synthetic loop): "
+              "p50 %.1f us  p99 %.1f us  max %.1f us\n",
+              ages_us.size(), rate_hz, age_p50, age_p99, percentile(ages_us, 1.0));
+  std::printf("DDS floor, one-way (ping-pong RTT/2, %zu round trips, same QoS):     "
+              "p50 %.1f us  p99 %.1f us\n",
+              one_way_us.size(), floor_p50, floor_p99);
+  std::printf("target: age p99 <= period %.0f us + 2 x floor p99 = %.1f us: %s\n", period_us,
+              target_us, age_p99 <= target_us ? "met" : "NOT met");
+  return finish(age_p99 <= target_us ? 0 : 3);
+}
+
+}  // namespace
+}  // namespace swivel::dds
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "swivel-bench-dds: age of the robot state at a client process, next to the DDS\n"
+      "ping-pong floor of the same run. DDS configuration: CYCLONEDDS_URI when set,\n"
+      "otherwise Swivel's loopback.xml. Now: " +
+      swivel::dds::describe_tool_config()};
+  bool server = false;
+  std::string robot = "bench_" + std::to_string(getpid());
+  double rate_hz = 100.0, seconds = 5.0;
+  int pings = 1000;
+  app.add_flag("--server", server, "run the publishing side (started by the benchmark)");
+  app.add_option("--robot", robot, "robot id of the synthetic daemon");
+  app.add_option("--rate-hz", rate_hz, "publish rate, Hz")->capture_default_str();
+  app.add_option("--seconds", seconds, "state measurement window, s")->capture_default_str();
+  app.add_option("--pings", pings, "ping-pong round trips")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    return server ? swivel::dds::run_server(robot, rate_hz)
+                  : swivel::dds::run_client(robot, rate_hz, seconds, pings);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-bench-dds: %s\n", e.what());
+    return 1;
+  }
+}
