@@ -1,0 +1,73 @@
+#pragma once
+// The daemon's configuration file (config/swiveld.yaml), read and validated in full before
+// anything starts. Start-up code: throws ConfigError naming file:line:column and key.
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "swivel/robot_model.hpp"
+#include "swivel/types.hpp"
+
+namespace swivel::daemon {
+
+/// One plugin slot: `{plugin: NAME, params: {...}}`. The plugin validates its own params.
+struct PluginConfig {
+  std::string plugin;           ///< plugin name, e.g. "differential"
+  YAML::Node params;            ///< the `params:` mapping (null when absent)
+  std::string params_path;      ///< "drivetrain.params", for messages
+  std::string where;            ///< "swiveld.yaml:14:11: drivetrain.plugin:", for messages
+};
+
+/// One step of the built-in motion script: hold `twist` for `duration_s`.
+struct ScriptStep {
+  Twist2 twist;
+  double duration_s = 1.0;
+};
+
+enum class CommandSource { kScript, kNone };
+
+struct CommandConfig {
+  double timeout_s = 0.5;  ///< a velocity command older than this stops the robot
+  CommandSource source = CommandSource::kNone;
+  std::vector<ScriptStep> script;  ///< played in a loop when source is kScript
+};
+
+struct DaemonConfig {
+  std::string file;        ///< the configuration file as given
+  std::string config_dir;  ///< its directory: base of relative paths
+
+  double rate_hz = 1000.0;   ///< loop.rate_hz
+  int fifo_priority = 80;    ///< loop.fifo_priority (SCHED_FIFO, 1..99)
+  bool realtime = true;      ///< loop.realtime: try SCHED_FIFO, mlockall, cpu_dma_latency
+
+  std::string robot_model_path;  ///< resolved path of robot_model
+  RobotModel robot;              ///< the nominal robot model, loaded and validated
+
+  PluginConfig hardware;
+  PluginConfig drivetrain;
+  PluginConfig localization;
+
+  CommandConfig command;
+  std::vector<std::string> plugin_path;  ///< searched before the default search path
+  std::string log_level = "info";        ///< spdlog level name
+  double status_period_s = 1.0;          ///< status line period on stdout
+  YAML::Node dds;  ///< the `dds:` mapping, validated by the DDS bridge (null when absent)
+
+  [[nodiscard]] double period_s() const { return 1.0 / rate_hz; }
+};
+
+/// Reads, validates and resolves a configuration file (the robot model included).
+/// @throws ConfigError naming file:line:column, the key and what was expected.
+DaemonConfig load_daemon_config(const std::string& path);
+
+/// As load_daemon_config, from text; `file` names it in messages and `config_dir` is the
+/// base of relative paths.
+DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string& file,
+                                 const std::string& config_dir);
+
+/// The log level names accepted by logging.level and --log-level.
+const std::vector<std::string>& log_level_names();
+
+}  // namespace swivel::daemon

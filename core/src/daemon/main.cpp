@@ -1,0 +1,67 @@
+// swiveld: runs a robot from the real-time loop with the plugins its configuration names.
+//   swiveld --config FILE [--check] [--log-level LEVEL]
+
+#include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+
+#include "swivel/config/config_error.hpp"
+#include "swivel/daemon/daemon.hpp"
+#include "swivel/daemon/daemon_config.hpp"
+#include "swivel/plugin_loader.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"swiveld: the Swivel robot control daemon"};
+  std::string config_file;
+  bool check = false;
+  std::string log_level;
+  app.add_option("-c,--config", config_file, "configuration file (YAML)")->required();
+  app.add_flag("--check", check, "validate the configuration and plugins, then exit");
+  app.add_option("--log-level", log_level, "overrides logging.level")
+      ->check(CLI::IsMember(swivel::daemon::log_level_names()));
+  CLI11_PARSE(app, argc, argv);
+
+  // Block the stop signals before any thread exists so that every thread inherits the mask
+  // and only run_until_signal() receives them (no work in a signal handler).
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  auto logger = spdlog::stderr_color_mt("swiveld");
+  logger->set_pattern("%Y-%m-%d %H:%M:%S.%e swiveld %^%l%$: %v");
+  spdlog::set_default_logger(logger);
+
+  try {
+    swivel::daemon::DaemonConfig config = swivel::daemon::load_daemon_config(config_file);
+    spdlog::set_level(spdlog::level::from_str(log_level.empty() ? config.log_level : log_level));
+    swivel::daemon::Daemon daemon(std::move(config));
+    const auto& c = daemon.config();
+    if (check) {
+      std::printf("%s: configuration valid (robot %s, hardware %s, drivetrain %s, "
+                  "localization %s)\n",
+                  c.file.c_str(), c.robot.name.c_str(), c.hardware.plugin.c_str(),
+                  c.drivetrain.plugin.c_str(), c.localization.plugin.c_str());
+      return 0;
+    }
+    daemon.start();
+    const int signal = daemon.run_until_signal(stop_signals);
+    spdlog::info("received {}, stopping", signal == SIGINT ? "SIGINT" : "SIGTERM");
+    daemon.stop();
+    std::fflush(stdout);
+    spdlog::info("stopped cleanly: robot at zero velocity");
+    return 0;
+  } catch (const swivel::ConfigError& e) {
+    spdlog::error("{}", e.what());
+  } catch (const swivel::PluginError& e) {
+    spdlog::error("{}", e.what());
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  return 1;
+}

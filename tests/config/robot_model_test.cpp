@@ -1,0 +1,211 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+#include "swivel/config/config_error.hpp"
+#include "swivel/robot_model_io.hpp"
+
+namespace swivel {
+namespace {
+
+const std::string kDocent = R"(name: docent
+drivetrain: differential
+differential:
+  wheel_radius_left_m: 0.075
+  wheel_radius_right_m: 0.0752
+  track_width_m: 0.40
+sensors:
+  wheel_encoder_counts_per_rev: 4096
+  gyro: {scale: 1.01, bias_rad_s: 0.006, noise_rad_s: 0.002}
+  motion_capture: {position_noise_m: 0.0003, yaw_noise_rad: 0.001}
+effects: {}
+)";
+
+const std::string kSwpc = R"(name: "cart 7"
+drivetrain: swpc
+swpc:
+  modules:
+    - {x_m: 0.215, y_m: 0.125, steering_offset_rad: 0.01, caster_offset_m: 0.020, wheel_radius_m: 0.055}
+    - {x_m: -0.215, y_m: -0.125, steering_offset_rad: -0.02, caster_offset_m: 0.021, wheel_radius_m: 0.0551}
+sensors:
+  steering_encoder_counts_per_rev: 8192
+  motion_capture: {rate_hz: 120}
+effects:
+  gyro_bias: {bias_rad_s: 0.006}
+  slip: {ratio: 0.1, onset_mps: 0.3}
+)";
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_robot_model(text, "robot.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return {};
+}
+
+void expect_same(const RobotModel& a, const RobotModel& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.drivetrain, b.drivetrain);
+  EXPECT_EQ(a.differential.wheel_radius_left_m, b.differential.wheel_radius_left_m);
+  EXPECT_EQ(a.differential.wheel_radius_right_m, b.differential.wheel_radius_right_m);
+  EXPECT_EQ(a.differential.track_width_m, b.differential.track_width_m);
+  ASSERT_EQ(a.modules.size(), b.modules.size());
+  for (std::size_t i = 0; i < a.modules.size(); ++i) {
+    EXPECT_EQ(a.modules[i].x_m, b.modules[i].x_m);
+    EXPECT_EQ(a.modules[i].y_m, b.modules[i].y_m);
+    EXPECT_EQ(a.modules[i].steering_offset_rad, b.modules[i].steering_offset_rad);
+    EXPECT_EQ(a.modules[i].caster_offset_m, b.modules[i].caster_offset_m);
+    EXPECT_EQ(a.modules[i].wheel_radius_m, b.modules[i].wheel_radius_m);
+  }
+  EXPECT_EQ(a.sensors.wheel_encoder_counts_per_rev, b.sensors.wheel_encoder_counts_per_rev);
+  EXPECT_EQ(a.sensors.steering_encoder_counts_per_rev, b.sensors.steering_encoder_counts_per_rev);
+  EXPECT_EQ(a.sensors.gyro.scale, b.sensors.gyro.scale);
+  EXPECT_EQ(a.sensors.gyro.bias_rad_s, b.sensors.gyro.bias_rad_s);
+  EXPECT_EQ(a.sensors.gyro.noise_rad_s, b.sensors.gyro.noise_rad_s);
+  EXPECT_EQ(a.sensors.motion_capture.position_noise_m, b.sensors.motion_capture.position_noise_m);
+  EXPECT_EQ(a.sensors.motion_capture.yaw_noise_rad, b.sensors.motion_capture.yaw_noise_rad);
+  EXPECT_EQ(a.sensors.motion_capture.rate_hz, b.sensors.motion_capture.rate_hz);
+  EXPECT_EQ(a.effects, b.effects);
+}
+
+TEST(RobotModel, ParsesDifferentialModel) {
+  const RobotModel m = parse_robot_model(kDocent, "docent.yaml");
+  EXPECT_EQ(m.name, "docent");
+  EXPECT_EQ(m.drivetrain, DrivetrainKind::kDifferential);
+  EXPECT_EQ(m.differential.wheel_radius_right_m, 0.0752);
+  EXPECT_EQ(m.sensors.gyro.bias_rad_s, 0.006);
+  EXPECT_EQ(m.sensors.motion_capture.rate_hz, 100.0);  // default
+  EXPECT_EQ(m.module_count(), 2U);
+  EXPECT_TRUE(m.effects.empty());
+  EXPECT_EQ(m.source_file, "docent.yaml");
+}
+
+TEST(RobotModel, ParsesSwpcModelWithEffects) {
+  const RobotModel m = parse_robot_model(kSwpc, "cart.yaml");
+  EXPECT_EQ(m.name, "cart 7");
+  ASSERT_EQ(m.module_count(), 2U);
+  EXPECT_EQ(m.modules[1].x_m, -0.215);
+  EXPECT_EQ(m.modules[1].wheel_radius_m, 0.0551);
+  EXPECT_EQ(m.sensors.steering_encoder_counts_per_rev, 8192);
+  EXPECT_EQ(m.sensors.motion_capture.rate_hz, 120.0);
+  EXPECT_EQ(m.effects.at("slip").at("onset_mps"), 0.3);
+  EXPECT_EQ(m.effects.at("gyro_bias").at("bias_rad_s"), 0.006);
+}
+
+TEST(RobotModel, SaveThenLoadGivesTheSameModel) {
+  for (const std::string& text : {kDocent, kSwpc}) {
+    const RobotModel original = parse_robot_model(text, "in.yaml");
+    const std::string path = testing::TempDir() + "/saved_model.yaml";
+    save_robot_model(original, path);
+    expect_same(load_robot_model(path), original);
+    std::remove(path.c_str());
+  }
+}
+
+TEST(RobotModel, WritesShortestExactNumbers) {
+  const std::string yaml = robot_model_to_yaml(parse_robot_model(kDocent, "in.yaml"));
+  EXPECT_NE(yaml.find("  wheel_radius_left_m: 0.075\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("effects: {}\n"), std::string::npos) << yaml;
+}
+
+TEST(RobotModel, RepositoryDocentModelLoads) {
+  const RobotModel m =
+      load_robot_model(std::string(SWIVEL_SOURCE_DIR) + "/config/robots/docent.yaml");
+  EXPECT_EQ(m.name, "docent");
+  EXPECT_EQ(m.differential.track_width_m, 0.40);
+  EXPECT_EQ(m.differential.wheel_radius_left_m, 0.075);
+  EXPECT_EQ(m.sensors.gyro.noise_rad_s, 0.002);
+}
+
+TEST(RobotModel, RejectsUnknownKeyWithKnownKeys) {
+  std::string text = kDocent;
+  text.insert(text.find("  track_width_m"), "  tire_pressure_bar: 2\n");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:6:3: differential.tire_pressure_bar: unknown key (known: "
+            "wheel_radius_left_m, wheel_radius_right_m, track_width_m)");
+}
+
+TEST(RobotModel, MisspeltRequiredKeyIsPointedAt) {
+  std::string text = kDocent;
+  text.replace(text.find("  track_width_m"), 15, "  track_widht_m");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:4:3: differential: missing required key 'track_width_m' (expected a "
+            "number); is 'track_widht_m' on line 6 a misspelling?");
+}
+
+TEST(RobotModel, RejectsMissingRequiredKey) {
+  std::string text = kDocent;
+  text.erase(text.find("  wheel_radius_left_m: 0.075\n"), 29);
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:4:3: differential: missing required key 'wheel_radius_left_m' "
+            "(expected a number)");
+}
+
+TEST(RobotModel, RejectsNonPositiveGeometry) {
+  std::string text = kDocent;
+  text.replace(text.find("0.40"), 4, "-0.4");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:6:3: differential.track_width_m: expected a positive number, got -0.4");
+}
+
+TEST(RobotModel, RejectsSectionThatDoesNotMatchDrivetrain) {
+  std::string text = kDocent;
+  text.replace(text.find("drivetrain: differential"), 24, "drivetrain: swpc");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:3:1: differential: section does not match drivetrain 'swpc' "
+            "(expected a 'swpc' section)");
+}
+
+TEST(RobotModel, RejectsUnknownDrivetrain) {
+  std::string text = kDocent;
+  text.replace(text.find("drivetrain: differential"), 24, "drivetrain: tank");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:2:1: drivetrain: expected one of differential, swpc, got 'tank'");
+}
+
+TEST(RobotModel, RejectsSwpcWithOneModule) {
+  std::string text = kSwpc;
+  text.erase(text.find("    - {x_m: -0.215"), text.find("sensors:") - text.find("    - {x_m: -0.215"));
+  EXPECT_EQ(error_of(text), "robot.yaml:4:3: swpc.modules: expected between 2 and 16 modules, got 1");
+}
+
+TEST(RobotModel, RejectsUnknownKeyInModule) {
+  std::string text = kSwpc;
+  text.replace(text.find("wheel_radius_m: 0.0551"), 14, "wheel_diameter_m");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:6:7: swpc.modules[1]: missing required key 'wheel_radius_m' (expected a "
+            "number)");
+  text.replace(text.find("wheel_diameter_m"), 16, "wheel_radius_m: 0.055, camber_rad");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:6:109: swpc.modules[1].camber_rad: unknown key (known: x_m, y_m, "
+            "steering_offset_rad, caster_offset_m, wheel_radius_m)");
+}
+
+TEST(RobotModel, RejectsNonNumericEffectParameter) {
+  std::string text = kSwpc;
+  text.replace(text.find("0.006}"), 5, "large");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:11:15: effects.gyro_bias.bias_rad_s: expected a number, got 'large'");
+}
+
+TEST(RobotModel, RejectsBrokenYamlWithLineAndColumn) {
+  const std::string error = error_of("name: docent\ndifferential: {track_width_m: 0.4\n");
+  EXPECT_EQ(error.rfind("robot.yaml:", 0), 0U) << error;
+  EXPECT_NE(error.find(": invalid YAML: "), std::string::npos) << error;
+  EXPECT_NE(error.find("robot.yaml:3:1:"), std::string::npos) << error;
+}
+
+TEST(RobotModel, MissingFileNamesIt) {
+  try {
+    load_robot_model("/nonexistent/robot.yaml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/robot.yaml: cannot read robot model file");
+  }
+}
+
+}  // namespace
+}  // namespace swivel

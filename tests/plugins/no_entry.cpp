@@ -1,0 +1,2 @@
+// A shared library without the plugin entry point.
+extern "C" __attribute__((visibility("default"))) int swivel_not_a_plugin(void) { return 1; }
