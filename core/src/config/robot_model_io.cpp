@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <charconv>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -84,11 +86,18 @@ std::map<std::string, EffectParams> read_effects(ParamReader r) {
   const YAML::Node& node = r.node();
   if (!node.IsMap()) return effects;
   for (auto it = node.begin(); it != node.end(); ++it) {
+    if (!it->first.IsScalar()) {
+      r.fail("", "effect names must be non-empty strings");
+    }
     const std::string name = it->first.Scalar();
+    if (name.empty()) r.fail("", "effect names must be non-empty strings");
     ParamReader effect = r.child(name);
     EffectParams params;
     if (effect.node().IsMap()) {
       for (auto p = effect.node().begin(); p != effect.node().end(); ++p) {
+        if (!p->first.IsScalar() || p->first.Scalar().empty()) {
+          effect.fail("", "effect parameter names must be non-empty strings");
+        }
         const std::string key = p->first.Scalar();
         params[key] = effect.number(key, -kMax, kMax);
       }
@@ -119,23 +128,41 @@ std::string num(double value) {
   return std::string(buf, result.ptr);
 }
 
-// Plain scalar when it is safe, else a double-quoted one.
+// YAML 1.1/1.2 words that a plain scalar would turn into a bool or null.
+bool is_yaml_keyword(const std::string& value) {
+  std::string lower;
+  for (const char c : value) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* word : {"true", "false", "null", "yes", "no", "on", "off", "y", "n", "~"}) {
+    if (lower == word) return true;
+  }
+  return false;
+}
+
+// Plain scalar when it is safe, else a double-quoted one with every control byte escaped,
+// so that any string reads back unchanged.
 std::string text(const std::string& value) {
-  bool plain = !value.empty();
+  bool plain = !value.empty() && !is_yaml_keyword(value);
   for (const char c : value) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
                     (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
     plain = plain && ok;
   }
-  if (plain && !(value[0] >= '0' && value[0] <= '9') && value[0] != '-' && value[0] != '.' &&
-      value != "true" && value != "false" && value != "null" && value != "yes" &&
-      value != "no" && value != "on" && value != "off") {
+  if (plain && !(value[0] >= '0' && value[0] <= '9') && value[0] != '-' && value[0] != '.') {
     return value;
   }
   std::string out = "\"";
   for (const char c : value) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (byte < 0x20 || byte == 0x7f) {
+      char escaped[8];
+      (void)std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
+      out += escaped;
+    } else {
+      out += c;
+    }
   }
   return out + "\"";
 }

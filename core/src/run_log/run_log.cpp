@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <istream>
 #include <ostream>
 #include <string_view>
@@ -106,6 +107,16 @@ class Parser {
       if (line.front() != '#') {
         have_line_ = true;
         break;
+      }
+      // Header lines are text: a control byte means a corrupt file, and could not be written
+      // back unchanged.
+      for (const char c : line) {
+        const auto byte = static_cast<unsigned char>(c);
+        if ((byte < 0x20 && c != '\t') || byte == 0x7f) {
+          char code[8];
+          (void)std::snprintf(code, sizeof code, "0x%02x", byte);
+          fail(std::string("control character ") + code + " in a header comment line");
+        }
       }
       if (starts_with(line, kVersionPrefix) || line == trim(kVersionPrefix)) {
         const std::string_view value = trim(line.substr(kVersionPrefix.size() - 1));
