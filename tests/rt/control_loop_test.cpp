@@ -361,5 +361,78 @@ TEST(ControlLoopThread, RunsAndStopsWithZeroSetpoints) {
   EXPECT_FALSE(loop.running());
 }
 
+// A procedure that drives both wheels at 2 rad/s for `cycles` steps, then finishes.
+class FakeCalibration final : public Calibration {
+ public:
+  void configure(const PluginContext&) override {}
+  Status step(const HardwareState&, ActuatorCommand& out) noexcept override {
+    out = ActuatorCommand{};
+    out.module_count = 2;
+    if (fail_now) return Status::kError;
+    out.wheel_rate_radps = {2.0, 2.0};
+    if (++steps >= cycles) done = true;
+    return Status::kOk;
+  }
+  [[nodiscard]] CalibrationProgress progress() const noexcept override { return {}; }
+  [[nodiscard]] bool finished() const noexcept override { return done; }
+  [[nodiscard]] bool failed() const noexcept override { return false; }
+  CalibrationReport analyse() override { return {}; }
+  [[nodiscard]] const char* last_error() const noexcept override { return "fake failure"; }
+
+  int cycles = 50;
+  int steps = 0;
+  bool done = false;
+  bool fail_now = false;
+};
+
+TEST(ControlLoopCalibration, RunsAtCycleBoundaryIgnoresCommandsAndHandsBack) {
+  LoopRig rig;
+  FakeCalibration calibration;
+  ASSERT_TRUE(rig.loop->start_calibration(&calibration));
+  EXPECT_FALSE(rig.loop->start_calibration(&calibration));  // one in flight at a time
+  EXPECT_EQ(rig.loop->take_finished_calibration(), nullptr);
+  rig.drive(0.5, 0.0, 10);  // commands are ignored while calibrating
+  EXPECT_EQ(rig.state().mode, LoopMode::kCalibration);
+  EXPECT_EQ(rig.hardware.last_left_radps.load(), 2.0);  // the procedure's setpoints, not IK
+  EXPECT_EQ(calibration.steps, 10);
+
+  rig.step(40);
+  EXPECT_EQ(rig.state().mode, LoopMode::kIdle);  // the old command does not resume
+  EXPECT_TRUE(rig.wheels_stopped());
+  CalibrationOutcome outcome = CalibrationOutcome::kNone;
+  EXPECT_EQ(rig.loop->take_finished_calibration(&outcome), &calibration);
+  EXPECT_EQ(outcome, CalibrationOutcome::kFinished);
+  EXPECT_FALSE(rig.loop->calibration_in_flight());
+  EXPECT_EQ(calibration.steps, 50);
+}
+
+TEST(ControlLoopCalibration, StepErrorSafeStopsWithCalibrationError) {
+  LoopRig rig;
+  FakeCalibration calibration;
+  ASSERT_TRUE(rig.loop->start_calibration(&calibration));
+  rig.step(5);
+  calibration.fail_now = true;
+  rig.step();
+  EXPECT_TRUE(rig.wheels_stopped());
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault, FaultCode::kCalibrationError);
+  CalibrationOutcome outcome = CalibrationOutcome::kNone;
+  EXPECT_EQ(rig.loop->take_finished_calibration(&outcome), &calibration);
+  EXPECT_EQ(outcome, CalibrationOutcome::kFailed);
+}
+
+TEST(ControlLoopCalibration, CancelBeforeTheLoopTookItHandsItBackAtOnce) {
+  LoopRig rig;
+  FakeCalibration calibration;
+  ASSERT_TRUE(rig.loop->start_calibration(&calibration));
+  rig.loop->cancel_calibration();
+  CalibrationOutcome outcome = CalibrationOutcome::kNone;
+  EXPECT_EQ(rig.loop->take_finished_calibration(&outcome), &calibration);
+  EXPECT_EQ(outcome, CalibrationOutcome::kCancelled);
+  rig.step(3);
+  EXPECT_EQ(calibration.steps, 0);  // never stepped
+  EXPECT_EQ(rig.state().mode, LoopMode::kIdle);
+}
+
 }  // namespace
 }  // namespace swivel::rt

@@ -10,8 +10,14 @@
 #include <mutex>
 #include <set>
 
+#include <fstream>
+#include <sstream>
+
+#include "config_watcher.hpp"
 #include "swivel/config/config_error.hpp"
+#include "swivel/dds/bridge.hpp"
 #include "swivel/rt/control_loop.hpp"
+#include "swivel/run_log.hpp"
 
 namespace swivel::daemon {
 namespace {
@@ -62,6 +68,41 @@ const char* mode_name(LoopMode mode) {
   return "unknown";
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string dump(const YAML::Node& node) {
+  if (!node || node.IsNull()) return "";
+  YAML::Emitter out;
+  out << node;
+  return out.c_str();
+}
+
+bool same_slot(const PluginConfig& a, const PluginConfig& b) {
+  return a.plugin == b.plugin && dump(a.params) == dump(b.params);
+}
+
+bool same_script(const std::vector<ScriptStep>& a, const std::vector<ScriptStep>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].duration_s != b[i].duration_s || a[i].twist.vx_mps != b[i].twist.vx_mps ||
+        a[i].twist.vy_mps != b[i].twist.vy_mps || a[i].twist.wz_radps != b[i].twist.wz_radps) {
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string text;
+  for (const auto& item : items) text += (text.empty() ? "" : ", ") + item;
+  return text;
+}
+
 timespec to_timespec(double seconds) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(seconds);
@@ -77,7 +118,19 @@ double monotonic_now_s() noexcept {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
-Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), loader_(search_path(config_)) {
+struct Daemon::Recorder {
+  std::unique_ptr<RunLogWriter> writer;
+  std::string path;
+};
+
+Daemon::Daemon(DaemonConfig config, DaemonOptions options)
+    : config_(std::move(config)),
+      options_(std::move(options)),
+      loader_(search_path(config_)),
+      notifier_(service::Notifier::from_environment()) {
+  dds_options_ = dds::parse_dds_options(config_.dds, config_.file, config_.config_dir);
+  robot_model_text_ = read_text(config_.robot_model_path);
+  status_period_s_ = config_.status_period_s;
   hardware_ = create_plugin<Hardware>(loader_, config_.hardware);
   drivetrain_ = create_plugin<Drivetrain>(loader_, config_.drivetrain);
   localization_ = create_plugin<Localization>(loader_, config_.localization);
@@ -91,18 +144,30 @@ Daemon::Daemon(DaemonConfig config) : config_(std::move(config)), loader_(search
                       std::to_string(config_.robot.module_count()));
   }
   localization_->reset(PoseEstimate{});
+  if (!(options_.record_rate_hz > 0.0 && options_.record_rate_hz <= 10000.0)) {
+    throw ConfigError("--record-rate-hz: expected a rate in (0, 10000] Hz");
+  }
 }
 
 Daemon::~Daemon() { stop(); }
 
 void Daemon::start() {
-  rt::LoopOptions options;
-  options.rate_hz = config_.rate_hz;
-  options.fifo_priority = config_.fifo_priority;
-  options.realtime = config_.realtime;
-  options.command_timeout_s = config_.command.timeout_s;
-  loop_ = std::make_unique<rt::ControlLoop>(options, *hardware_, *drivetrain_, *localization_,
-                                            config_.localization.plugin.c_str());
+  if (!options_.record_path.empty()) {
+    recorder_ = std::make_unique<Recorder>();
+    recorder_->path = options_.record_path;
+    RunLogHeader header = run_log_header(config_.robot);
+    header.comments.push_back("recorded by swiveld from " + config_.file + " at " +
+                              std::to_string(options_.record_rate_hz) + " Hz");
+    recorder_->writer = std::make_unique<RunLogWriter>(options_.record_path, header);
+  }
+
+  rt::LoopOptions loop_options;
+  loop_options.rate_hz = config_.rate_hz;
+  loop_options.fifo_priority = config_.fifo_priority;
+  loop_options.realtime = config_.realtime;
+  loop_options.command_timeout_s = config_.command.timeout_s;
+  loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
+                                            *localization_, config_.localization.plugin.c_str());
   start_s_ = monotonic_now_s();
   std::set<std::string> seen;
   for (const auto& warning : loop_->start()) {
@@ -116,16 +181,129 @@ void Daemon::start() {
     spdlog::info("command source: script of {} steps, played in a loop",
                  config_.command.script.size());
   }
+  if (recorder_) {
+    recorder_thread_ = std::jthread([this](const std::stop_token& stop) { run_recorder(stop); });
+    spdlog::info("recording the run log to {} at {} Hz", recorder_->path, options_.record_rate_hz);
+  }
+  if (options_.dds) start_bridge();
+  if (options_.watch_config) {
+    try {
+      watcher_ = std::make_unique<ConfigWatcher>(config_.file, [this] { request_reload(); });
+    } catch (const std::exception& e) {
+      spdlog::warn("{}: configuration changes are not watched ({}); reload with SIGHUP",
+                   config_.file, e.what());
+    }
+  }
+  watchdog_interval_ = service::watchdog_interval_from_environment();
+  if (notifier_.enabled()) {
+    notifier_.ready("running " + config_.robot.name + " at " +
+                    std::to_string(static_cast<int>(config_.rate_hz)) + " Hz");
+  }
+}
+
+void Daemon::start_bridge() {
+  dds::DdsCallbacks callbacks;
+  callbacks.read_state = [this](StateSnapshot& out) {
+    out = loop_->latest();
+    return out.cycle > 0;
+  };
+  // push_command has one producer: DDS commands drive the robot only when the daemon has no
+  // command source of its own.
+  if (config_.command.source == CommandSource::kNone) {
+    callbacks.on_command = [this](const VelocityCommand& c) { return loop_->push_command(c); };
+  } else {
+    spdlog::info("DDS velocity commands are ignored: command.source is 'script'");
+  }
+  callbacks.on_motion_capture = [this](const MotionCaptureSample& m) {
+    return loop_->push_motion_capture(m);
+  };
+  callbacks.read_diagnostics = [this] { return read_diagnostics(); };
+  callbacks.on_request = [this](const dds::RequestSample& request) {
+    if (request.verb == "reload") {
+      request_reload();
+    } else {
+      spdlog::warn("DDS request '{}' is not supported; ignored", request.verb);
+    }
+  };
+  bridge_ = std::make_unique<dds::DdsBridge>(dds_options_, config_.robot.name,
+                                             std::move(callbacks));
+  bridge_->start();
+  spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
+               dds_options_.domain_id,
+               dds_options_.config_uri.empty() ? "default configuration" : dds_options_.config_uri,
+               dds_options_.publish_rate_hz,
+               dds_options_.ros2.enabled ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic()
+                                         : std::string());
+}
+
+dds::DiagnosticsSample Daemon::read_diagnostics() {
+  dds::DiagnosticsSample d;
+  const auto timing = loop_->timing();
+  const StateSnapshot s = loop_->latest();
+  const double now = monotonic_now_s();
+  d.uptime_s = now - start_s_;
+  d.loop_rate_hz = 1.0 / loop_->period_s();
+  if (rate_window_s_ > 0.0 && now > rate_window_s_) {
+    measured_rate_hz_ = static_cast<double>(s.cycle - rate_window_cycles_) / (now - rate_window_s_);
+  }
+  rate_window_s_ = now;
+  rate_window_cycles_ = s.cycle;
+  d.measured_rate_hz = measured_rate_hz_;
+  d.lateness = {timing.lateness_p50_us, timing.lateness_p99_us, timing.lateness_p999_us,
+                timing.lateness_max_us};
+  d.cycle_time = {timing.cycle_p50_us, timing.cycle_p99_us, timing.cycle_p999_us,
+                  timing.cycle_max_us};
+  d.cycles = timing.cycles;
+  d.overruns = timing.overruns;
+  d.fault_count = s.fault_count;
+  d.fault = s.fault;
+  // Hardware and drivetrain never change while running; the localization is the loop's.
+  d.hardware_plugin = hardware_.name();
+  d.drivetrain_plugin = drivetrain_.name();
+  d.localization_plugin = s.localization_plugin.data();
+  std::lock_guard lock(reload_mutex_);
+  d.reload_count = reload_count_;
+  d.last_reload_ok = last_reload_.ok;
+  d.last_reload_result = last_reload_.text;
+  d.restart_required = restart_required_;
+  return d;
 }
 
 void Daemon::stop() noexcept {
+  const bool was_running = loop_ != nullptr;
+  if (was_running && notifier_.enabled()) {
+    try {
+      notifier_.stopping();
+    } catch (...) {
+    }
+  }
+  watcher_.reset();
+  if (bridge_) {
+    bridge_->stop();
+    bridge_.reset();
+  }
   if (command_thread_.joinable()) {
     command_thread_.request_stop();
     command_thread_.join();
   }
+  if (recorder_thread_.joinable()) {
+    recorder_thread_.request_stop();
+    recorder_thread_.join();
+  }
   if (loop_) {
     loop_->stop();
+    // A swap the loop never took: the instance was not used, the outgoing one still is.
+    collect_retired_localization();
     loop_.reset();
+  }
+  retiring_.reset();
+  if (recorder_) {
+    try {
+      recorder_->writer->flush();
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+    }
+    recorder_.reset();
   }
 }
 
@@ -155,17 +333,210 @@ void Daemon::run_script(const std::stop_token& stop) {
   }
 }
 
+void Daemon::run_recorder(const std::stop_token& stop) {
+  const auto period = std::chrono::duration<double>(1.0 / options_.record_rate_hz);
+  const bool differential = config_.robot.drivetrain == DrivetrainKind::kDifferential;
+  const std::size_t modules = config_.robot.module_count();
+  std::uint64_t last_cycle = 0;
+  double t0 = -1.0;
+  auto next = std::chrono::steady_clock::now();
+  auto next_flush = next + std::chrono::seconds(1);
+  std::mutex mutex;
+  std::condition_variable_any wake;
+  std::unique_lock lock(mutex);
+  while (!stop.stop_requested()) {
+    const StateSnapshot s = loop_->latest();
+    if (s.cycle > last_cycle) {
+      last_cycle = s.cycle;
+      if (t0 < 0.0) t0 = s.stamp_s;
+      RunLogSample row;
+      row.t_s = s.stamp_s - t0;
+      row.cmd = s.command_twist;
+      for (std::size_t i = 0; i < modules && i < kMaxModules; ++i) {
+        row.wheel_rad[i] = s.wheel_angle_rad[i];
+        if (!differential) row.steer_rad[i] = s.steer_angle_rad[i];
+      }
+      row.gyro_wz_radps = s.gyro_wz_radps;
+      row.has_truth = s.has_truth;
+      row.truth = s.truth;
+      try {
+        recorder_->writer->write(row);
+        if (std::chrono::steady_clock::now() >= next_flush) {
+          recorder_->writer->flush();
+          next_flush += std::chrono::seconds(1);
+        }
+      } catch (const std::exception& e) {
+        spdlog::error("run log {}: {}; recording stopped", recorder_->path, e.what());
+        return;
+      }
+    }
+    next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
+    wake.wait_until(lock, stop, next, [] { return false; });
+  }
+}
+
+void Daemon::collect_retired_localization() noexcept {
+  if (!loop_ || !retiring_) return;
+  Localization* retired = loop_->take_retired_localization();
+  if (retired == nullptr) return;
+  if (retired == retiring_.get()) {
+    retiring_.reset();  // the loop let go of it: destroy it, then its library may unload
+  } else {
+    spdlog::error("hot swap: the loop retired an unexpected localization instance");
+  }
+}
+
+ReloadResult Daemon::reload(const std::string& trigger) {
+  ReloadResult result;
+  if (notifier_.enabled()) notifier_.reloading("reloading " + config_.file);
+  spdlog::info("reloading {} ({})", config_.file, trigger);
+  PluginInstance<Localization> next;
+  try {
+    DaemonConfig fresh = load_daemon_config(config_.file);
+    (void)dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
+
+    std::vector<std::string> restart;
+    if (fresh.rate_hz != config_.rate_hz) restart.push_back("loop.rate_hz");
+    if (fresh.fifo_priority != config_.fifo_priority) restart.push_back("loop.fifo_priority");
+    if (fresh.realtime != config_.realtime) restart.push_back("loop.realtime");
+    if (fresh.robot_model_path != config_.robot_model_path ||
+        read_text(fresh.robot_model_path) != robot_model_text_) {
+      restart.push_back("robot_model");
+    }
+    if (!same_slot(fresh.hardware, config_.hardware)) restart.push_back("hardware");
+    if (!same_slot(fresh.drivetrain, config_.drivetrain)) restart.push_back("drivetrain");
+    if (fresh.command.timeout_s != config_.command.timeout_s ||
+        fresh.command.source != config_.command.source ||
+        !same_script(fresh.command.script, config_.command.script)) {
+      restart.push_back("command");
+    }
+    if (fresh.plugin_path != config_.plugin_path) restart.push_back("plugin_path");
+    if (dump(fresh.dds) != dump(config_.dds)) restart.push_back("dds");
+
+    std::vector<std::string> applied;
+    const bool swap = !same_slot(fresh.localization, config_.localization);
+    if (swap) {
+      if (retiring_) collect_retired_localization();
+      if (retiring_ || loop_->swap_pending()) {
+        throw PluginError("the previous localization swap has not completed yet; try again");
+      }
+      // Built and validated in full before anything changes; the robot model stays the one
+      // in effect (a changed model needs a restart).
+      next = create_plugin<Localization>(loader_, fresh.localization);
+      PluginContext ctx;
+      ctx.params = fresh.localization.params;
+      ctx.config_file = fresh.file;
+      ctx.params_path = fresh.localization.params_path;
+      ctx.config_dir = fresh.config_dir;
+      ctx.robot = &config_.robot;
+      ctx.period_s = config_.period_s();
+      try {
+        next->configure(ctx);
+      } catch (const ConfigError& e) {
+        throw ConfigError(e.what());
+      } catch (const std::exception& e) {
+        throw PluginError(fresh.localization.where + " plugin '" + fresh.localization.plugin +
+                          "' failed to configure: " + e.what());
+      }
+      next->reset(loop_->latest().estimate);
+    }
+
+    // Everything validated: apply.
+    if (swap) {
+      if (!loop_->request_localization_swap(next.get(), fresh.localization.plugin.c_str())) {
+        throw PluginError("the loop refused the localization swap (one is still pending)");
+      }
+      retiring_ = std::move(localization_);
+      localization_ = std::move(next);
+      // The loop takes it at its next cycle boundary; wait briefly so that the outgoing
+      // instance is destroyed now rather than at the next reload.
+      const double deadline = monotonic_now_s() + 2.0;
+      while (loop_->swap_pending() && monotonic_now_s() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      collect_retired_localization();
+      applied.push_back("localization " + config_.localization.plugin + " -> " +
+                        fresh.localization.plugin +
+                        (config_.localization.plugin == fresh.localization.plugin
+                             ? " (new parameters)"
+                             : ""));
+      config_.localization = fresh.localization;
+    }
+    if (fresh.log_level != config_.log_level) {
+      spdlog::set_level(spdlog::level::from_str(fresh.log_level));
+      applied.push_back("logging.level " + fresh.log_level);
+      config_.log_level = fresh.log_level;
+    }
+    if (fresh.status_period_s != config_.status_period_s) {
+      status_period_s_ = fresh.status_period_s;
+      config_.status_period_s = fresh.status_period_s;
+      applied.push_back("status.period_s");
+    }
+    result.ok = true;
+    result.restart_required = !restart.empty();
+    result.text = applied.empty() ? "no live change" : "applied " + join(applied);
+    if (!restart.empty()) result.text += "; needs a restart: " + join(restart);
+    spdlog::info("{}: reload {}", config_.file, result.text);
+    if (!restart.empty()) {
+      spdlog::warn("{}: changed settings need a restart to take effect: {}", config_.file,
+                   join(restart));
+    }
+  } catch (const std::exception& e) {
+    next.reset();
+    result.ok = false;
+    result.text = std::string("rejected: ") + e.what();
+    spdlog::error("{}: configuration rejected, still running on the last good one: {}",
+                  config_.file, e.what());
+  }
+  {
+    std::lock_guard lock(reload_mutex_);
+    ++reload_count_;
+    last_reload_ = result;
+    if (result.ok) restart_required_ = result.restart_required;
+  }
+  if (notifier_.enabled()) notifier_.ready(result.ok ? "reloaded" : "reload rejected");
+  return result;
+}
+
+void Daemon::send_watchdog_if_healthy() {
+  if (!loop_ || !notifier_.enabled()) return;
+  // Healthy means the loop has run cycles since the last ping; a stalled loop lets systemd's
+  // watchdog fire.
+  const std::uint64_t cycle = loop_->latest().cycle;
+  if (cycle > watchdog_cycle_ && loop_->running()) notifier_.watchdog();
+  watchdog_cycle_ = cycle;
+}
+
 int Daemon::run_until_signal(const sigset_t& signals) {
-  double next_s = monotonic_now_s() + config_.status_period_s;
+  constexpr double kTickS = 0.05;  // reload requests and retired instances are handled this often
+  double next_status_s = monotonic_now_s() + status_period_s_;
+  const double watchdog_period_s =
+      watchdog_interval_ ? static_cast<double>(watchdog_interval_->count()) * 1e-6 / 2.0 : 0.0;
+  double next_watchdog_s = monotonic_now_s();
   for (;;) {
-    const double wait_s = std::max(0.0, next_s - monotonic_now_s());
-    const timespec timeout = to_timespec(wait_s);
+    const double now = monotonic_now_s();
+    if (watchdog_interval_ && now >= next_watchdog_s) {
+      send_watchdog_if_healthy();
+      next_watchdog_s = now + watchdog_period_s;
+    }
+    if (reload_requested_.exchange(false, std::memory_order_acq_rel)) {
+      reload("configuration file changed or reload requested");
+    }
+    collect_retired_localization();
+    double wait_s = std::min(kTickS, next_status_s - monotonic_now_s());
+    if (watchdog_interval_) wait_s = std::min(wait_s, next_watchdog_s - monotonic_now_s());
+    const timespec timeout = to_timespec(std::max(0.0, wait_s));
     const int signal = sigtimedwait(&signals, nullptr, &timeout);
-    if (signal > 0) return signal;
-    if (errno == EAGAIN) {
+    if (signal == SIGHUP) {
+      reload("SIGHUP");
+    } else if (signal > 0) {
+      return signal;
+    }
+    if (monotonic_now_s() >= next_status_s) {
       std::fputs((status_line() + "\n").c_str(), stdout);
       std::fflush(stdout);
-      next_s += config_.status_period_s;
+      next_status_s += status_period_s_;
+      if (next_status_s < monotonic_now_s()) next_status_s = monotonic_now_s() + status_period_s_;
     }
   }
 }

@@ -1,5 +1,6 @@
 // swiveld: runs a robot from the real-time loop with the plugins its configuration names.
-//   swiveld --config FILE [--check] [--log-level LEVEL]
+//   swiveld --config FILE [--check] [--log-level LEVEL] [--record LOG.csv [--record-rate-hz HZ]]
+// SIGTERM/SIGINT stop it, SIGHUP reloads the configuration.
 
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -23,14 +24,22 @@ int main(int argc, char** argv) {
   app.add_flag("--check", check, "validate the configuration and plugins, then exit");
   app.add_option("--log-level", log_level, "overrides logging.level")
       ->check(CLI::IsMember(swivel::daemon::log_level_names()));
+  swivel::daemon::DaemonOptions options;
+  app.add_option("--record", options.record_path,
+                 "record the run as a run log (CSV, the format of swivel-lab)");
+  app.add_option("--record-rate-hz", options.record_rate_hz, "run-log rows per second")
+      ->check(CLI::Range(0.1, 10000.0))
+      ->capture_default_str();
+  app.add_flag("!--no-dds", options.dds, "do not start the DDS bridge");
   CLI11_PARSE(app, argc, argv);
 
-  // Block the stop signals before any thread exists so that every thread inherits the mask
+  // Block the stop and reload signals before any thread exists so that every thread inherits the mask
   // and only run_until_signal() receives them (no work in a signal handler).
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGTERM);
   sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   auto logger = spdlog::stderr_color_mt("swiveld");
@@ -40,7 +49,7 @@ int main(int argc, char** argv) {
   try {
     swivel::daemon::DaemonConfig config = swivel::daemon::load_daemon_config(config_file);
     spdlog::set_level(spdlog::level::from_str(log_level.empty() ? config.log_level : log_level));
-    swivel::daemon::Daemon daemon(std::move(config));
+    swivel::daemon::Daemon daemon(std::move(config), options);
     const auto& c = daemon.config();
     if (check) {
       std::printf("%s: configuration valid (robot %s, hardware %s, drivetrain %s, "
@@ -54,6 +63,7 @@ int main(int argc, char** argv) {
     spdlog::info("received {}, stopping", signal == SIGINT ? "SIGINT" : "SIGTERM");
     daemon.stop();
     std::fflush(stdout);
+    if (!options.record_path.empty()) spdlog::info("run log written to {}", options.record_path);
     spdlog::info("stopped cleanly: robot at zero velocity");
     return 0;
   } catch (const swivel::ConfigError& e) {

@@ -159,6 +159,36 @@ Localization* ControlLoop::take_retired_localization() noexcept {
   return retired_localization_.exchange(nullptr, std::memory_order_acq_rel);
 }
 
+bool ControlLoop::start_calibration(Calibration* calibration) noexcept {
+  if (calibration == nullptr) return false;
+  if (calibration_in_flight_.load(std::memory_order_acquire)) return false;
+  calibration_in_flight_.store(true, std::memory_order_release);
+  cancel_calibration_.store(false, std::memory_order_release);
+  pending_calibration_.store(calibration, std::memory_order_release);
+  return true;
+}
+
+void ControlLoop::cancel_calibration() noexcept {
+  if (!calibration_in_flight_.load(std::memory_order_acquire)) return;
+  // Not taken by the loop yet: hand it back directly. At most one instance is in flight,
+  // so the retire slot is empty and the loop will never see this one.
+  if (Calibration* pending = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel)) {
+    retired_outcome_.store(CalibrationOutcome::kCancelled, std::memory_order_relaxed);
+    retired_calibration_.store(pending, std::memory_order_release);
+    return;
+  }
+  cancel_calibration_.store(true, std::memory_order_release);
+}
+
+Calibration* ControlLoop::take_finished_calibration(CalibrationOutcome* outcome) noexcept {
+  Calibration* retired = retired_calibration_.exchange(nullptr, std::memory_order_acq_rel);
+  if (retired == nullptr) return nullptr;
+  if (outcome != nullptr) *outcome = retired_outcome_.load(std::memory_order_relaxed);
+  cancel_calibration_.store(false, std::memory_order_release);
+  calibration_in_flight_.store(false, std::memory_order_release);
+  return retired;
+}
+
 void ControlLoop::log_event(LogLevel level, LogCode code, double now_s, const char* text, double a,
                             double b, double c, double d, const char* detail) noexcept {
   LogRecord record;
@@ -229,6 +259,70 @@ void ControlLoop::take_pending_swap(double now_s) noexcept {
   }
 }
 
+void ControlLoop::take_pending_calibration(double now_s) noexcept {
+  if (active_calibration_.load(std::memory_order_relaxed) != nullptr) return;
+  Calibration* next = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel);
+  if (next == nullptr) return;
+  active_calibration_.store(next, std::memory_order_release);
+  if (latched_fault_ != FaultCode::kNone) {
+    // A robot in safe stop must be cleared before anything moves it.
+    retire_calibration(CalibrationOutcome::kRefused, now_s);
+    return;
+  }
+  has_command_ = false;
+  log_event(LogLevel::kInfo, LogCode::kMessage, now_s, "calibration started");
+}
+
+void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) noexcept {
+  Calibration* outgoing = active_calibration_.load(std::memory_order_relaxed);
+  if (outgoing == nullptr) return;
+  retired_outcome_.store(outcome, std::memory_order_relaxed);
+  // start_calibration() refuses while an instance is in flight, so the slot is empty here.
+  retired_calibration_.store(outgoing, std::memory_order_release);
+  active_calibration_.store(nullptr, std::memory_order_release);
+  has_command_ = false;  // only a command sent after the calibration moves the robot
+  log_event(outcome == CalibrationOutcome::kFinished ? LogLevel::kInfo : LogLevel::kWarn,
+            LogCode::kMessage, now_s,
+            outcome == CalibrationOutcome::kFinished    ? "calibration finished"
+            : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
+            : outcome == CalibrationOutcome::kRefused   ? "calibration refused: fault latched"
+                                                        : "calibration stopped by a fault");
+}
+
+// One cycle of an active calibration. Returns true while it drives the actuators this cycle
+// (setpoints_ filled); false when there is none or it ended this cycle (the caller writes
+// zero setpoints).
+bool ControlLoop::step_calibration(double now_s, bool final_stop) noexcept {
+  Calibration* calibration = active_calibration_.load(std::memory_order_relaxed);
+  if (calibration == nullptr) return false;
+  if (final_stop || cancel_calibration_.exchange(false, std::memory_order_acq_rel)) {
+    retire_calibration(CalibrationOutcome::kCancelled, now_s);
+    if (!final_stop) raise_transient_fault(FaultCode::kCalibrationError, now_s, "calibration cancelled");
+    return false;
+  }
+  if (latched_fault_ != FaultCode::kNone) {
+    retire_calibration(CalibrationOutcome::kFailed, now_s);
+    return false;
+  }
+  const char* thrown = nullptr;
+  const Status status = guarded([&] { return calibration->step(current_, setpoints_); }, thrown);
+  if (status != Status::kOk) {
+    raise_fault(FaultCode::kCalibrationError, now_s,
+                thrown != nullptr ? thrown : calibration->last_error());
+  } else if (setpoints_.module_count != module_count_ || !finite(setpoints_)) {
+    raise_fault(FaultCode::kCalibrationError, now_s, "invalid calibration setpoints");
+  } else if (calibration->failed()) {
+    raise_fault(FaultCode::kCalibrationError, now_s, calibration->last_error());
+  } else if (calibration->finished()) {
+    retire_calibration(CalibrationOutcome::kFinished, now_s);
+    return false;
+  } else {
+    return true;
+  }
+  retire_calibration(CalibrationOutcome::kFailed, now_s);
+  return false;
+}
+
 void ControlLoop::run_cycle(double now_s) noexcept {
   cycle(now_s, false);
 }
@@ -236,6 +330,7 @@ void ControlLoop::run_cycle(double now_s) noexcept {
 void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   cycle_fault_ = FaultCode::kNone;
   take_pending_swap(now_s);
+  take_pending_calibration(now_s);
   Localization& localization = *active_localization_.load(std::memory_order_relaxed);
 
   // Read and check the hardware.
@@ -316,14 +411,22 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
   }
 
-  // Command -> setpoints -> hardware.
+  // Command -> setpoints -> hardware. A calibration writes module setpoints itself.
+  const bool had_calibration = active_calibration_.load(std::memory_order_relaxed) != nullptr;
+  const bool calibrating = step_calibration(now_s, final_stop);
+  if (calibrating) has_command_ = false;  // velocity commands are ignored meanwhile
   Twist2 target;
-  const bool moving = !final_stop && latched_fault_ == FaultCode::kNone && has_command_;
+  const bool moving =
+      !calibrating && !final_stop && latched_fault_ == FaultCode::kNone && has_command_;
   if (moving) target = command_.twist;
   Twist2 applied;
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
-  bool zeroed = basis == nullptr;
-  if (basis != nullptr) {
+  bool zeroed = basis == nullptr && !calibrating;
+  if (had_calibration && !calibrating) {
+    // The calibration ended this cycle: stop at once rather than through the drivetrain,
+    // whose state lags behind the procedure's setpoints.
+    write_zero_setpoints();
+  } else if (basis != nullptr && !calibrating) {
     if (guarded([&] { return drivetrain_.inverse(target, *basis, period_s_, setpoints_, applied); },
                 thrown) != Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
@@ -364,10 +467,14 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     state_.mode = LoopMode::kSafeStop;
     state_.fault = latched_fault_;
   } else {
-    state_.mode = moving ? LoopMode::kVelocity : LoopMode::kIdle;
+    state_.mode = calibrating ? LoopMode::kCalibration
+                  : moving    ? LoopMode::kVelocity
+                              : LoopMode::kIdle;
     state_.fault = transient_fault_;
   }
   state_.has_truth = hardware_.ground_truth(state_.truth);
+  state_.wheel_angle_rad = current_.wheel_angle_rad;
+  state_.steer_angle_rad = current_.steer_angle_rad;
   snapshot_.write(state_);
 }
 

@@ -1,51 +1,95 @@
 #pragma once
 // The daemon's wiring: plugins from the configuration, the real-time loop, the command
-// source and the status output. main() only parses the command line and handles signals;
-// the DDS bridge and configuration reload hook in here.
+// source, the DDS bridge, the systemd notifications, configuration reload (file watcher,
+// SIGHUP, DDS `reload` request), the run-log recorder and the status output. main() only
+// parses the command line and blocks the signals.
+//
+// Threads: the main thread (run_until_signal) owns reloads, hot swaps and the watchdog;
+// the loop thread runs the plugins; the bridge has a publisher and a subscriber thread; the
+// script command source, the recorder and the file watcher have one thread each. Nothing
+// added here runs on the loop thread.
 
 #include <signal.h>
 
+#include <atomic>
+#include <chrono>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include "swivel/daemon/daemon_config.hpp"
+#include "swivel/dds/options.hpp"
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/plugin_loader.hpp"
+#include "swivel/service/sd_notify.hpp"
 
 namespace swivel::rt {
 class ControlLoop;
 }
+namespace swivel::dds {
+class DdsBridge;
+struct DiagnosticsSample;
+}
 
 namespace swivel::daemon {
+
+class ConfigWatcher;
 
 /// Monotonic time in seconds (CLOCK_MONOTONIC, the loop's clock).
 double monotonic_now_s() noexcept;
 
+/// What the command line adds to the configuration file.
+struct DaemonOptions {
+  std::string record_path;        ///< run log (CSV) to record; "" records nothing
+  double record_rate_hz = 100.0;  ///< rows per second in the run log
+  bool dds = true;                ///< start the DDS bridge
+  bool watch_config = true;       ///< reload when the configuration file changes
+};
+
+/// The outcome of one configuration reload.
+struct ReloadResult {
+  bool ok = false;
+  bool restart_required = false;  ///< some changed settings wait for a restart
+  std::string text;               ///< what was applied, what needs a restart, or the error
+};
+
 class Daemon {
  public:
-  /// Loads every plugin and configures it, and resets the localization at the origin.
-  /// Nothing runs yet, so a failure here leaves no thread behind.
-  /// @throws ConfigError (a plugin's params) or PluginError (loading), both naming the
+  /// Loads every plugin and configures it, resets the localization at the origin and
+  /// validates the `dds:` section. Nothing runs yet, so a failure here leaves no thread.
+  /// @throws ConfigError (a plugin's params, dds) or PluginError (loading), both naming the
   ///         configuration file, line and key.
-  explicit Daemon(DaemonConfig config);
+  explicit Daemon(DaemonConfig config, DaemonOptions options = {});
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  /// Starts the real-time loop and the command source. Logs each real-time warning
-  /// (scheduling, memory locking) once.
+  /// Starts the recorder's file, the real-time loop, the command source, the DDS bridge and
+  /// the configuration watcher, then notifies READY=1. Logs each real-time warning once.
+  /// @throws RunLogError when the run log cannot be created; DdsError when DDS refuses.
   void start();
 
-  /// Stops the command source, then the loop (which leaves the robot at zero velocity).
-  /// Idempotent.
+  /// Notifies STOPPING=1, stops the watcher, the bridge, the command source and the
+  /// recorder, then the loop (which leaves the robot at zero velocity). Idempotent.
   void stop() noexcept;
 
-  /// Prints a status line every status period until one of `signals` arrives (they must be
-  /// blocked in every thread). Returns the signal number.
+  /// Prints a status line every status period, sends the watchdog while the loop advances
+  /// and performs reloads (SIGHUP, file change, DDS request) until SIGTERM or SIGINT
+  /// arrives. `signals` must hold SIGTERM, SIGINT and SIGHUP, blocked in every thread.
+  /// Returns the stopping signal's number.
   int run_until_signal(const sigset_t& signals);
+
+  /// Re-reads and validates the configuration file and applies what can change live (the
+  /// localization by hot swap, logging level, status period). Main thread only, while the
+  /// loop runs. `trigger` names the cause in the log.
+  ReloadResult reload(const std::string& trigger);
+
+  /// Asks the main thread to reload soon (any thread).
+  void request_reload() noexcept { reload_requested_.store(true, std::memory_order_release); }
 
   /// One status line: estimated and true pose, command, mode, fault and loop timing.
   [[nodiscard]] std::string status_line() const;
@@ -57,15 +101,45 @@ class Daemon {
 
  private:
   void run_script(const std::stop_token& stop);
+  void run_recorder(const std::stop_token& stop);
+  void start_bridge();
+  dds::DiagnosticsSample read_diagnostics();
+  void collect_retired_localization() noexcept;
+  void send_watchdog_if_healthy();
 
-  DaemonConfig config_;
+  DaemonConfig config_;  // the configuration in effect (main thread writes, on reload)
+  DaemonOptions options_;
+  dds::DdsOptions dds_options_;
+  std::string robot_model_text_;  // to tell a changed model apart on reload
   PluginLoader loader_;
   PluginInstance<Hardware> hardware_;
   PluginInstance<Drivetrain> drivetrain_;
-  PluginInstance<Localization> localization_;
+  PluginInstance<Localization> localization_;  // the instance the loop uses (or takes next)
+  PluginInstance<Localization> retiring_;      // swapped out; destroyed once the loop let go
   std::unique_ptr<rt::ControlLoop> loop_;
+  std::unique_ptr<dds::DdsBridge> bridge_;
+  std::unique_ptr<ConfigWatcher> watcher_;
   std::jthread command_thread_;
+  std::jthread recorder_thread_;
+  struct Recorder;
+  std::unique_ptr<Recorder> recorder_;
+  service::Notifier notifier_;
+  std::optional<std::chrono::microseconds> watchdog_interval_;
+  std::uint64_t watchdog_cycle_ = 0;
   double start_s_ = 0.0;
+  double status_period_s_ = 1.0;
+  std::atomic<bool> reload_requested_{false};
+
+  // Reload outcome for Diagnostics (publisher thread reads, main thread writes).
+  mutable std::mutex reload_mutex_;
+  std::uint32_t reload_count_ = 0;
+  ReloadResult last_reload_{true, false, ""};
+  bool restart_required_ = false;
+
+  // Measured-rate window (publisher thread only).
+  double rate_window_s_ = 0.0;
+  std::uint64_t rate_window_cycles_ = 0;
+  double measured_rate_hz_ = 0.0;
 };
 
 }  // namespace swivel::daemon

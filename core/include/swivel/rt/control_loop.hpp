@@ -16,9 +16,19 @@
 //    fresh valid command resumes.
 // Each fault event (not each faulty cycle) is counted and logged through RtLog.
 //
+// Calibration: start_calibration() hands the loop a configured Calibration; from the next
+// cycle boundary the mode is kCalibration and the setpoints come from its step() (the
+// drivetrain's inverse kinematics is bypassed; velocity commands are ignored). It ends with
+// zero setpoints in the same cycle when the procedure finishes (mode kIdle), is cancelled
+// (mode kIdle, fault kCalibrationError until a fresh command), fails (kSafeStop with
+// kCalibrationError) or any other fault stops the robot (kSafeStop with that fault). The
+// instance then waits in a retire slot for take_finished_calibration(). Only a command that
+// arrives after the calibration moves the robot again.
+//
 // Threads: the loop thread (or the caller of run_cycle()) runs every plugin call. One
 // command-source thread may call push_command(), one motion-capture thread
-// push_motion_capture(), one thread (the configuration watcher) the swap pair; any thread
+// push_motion_capture(), one thread (the configuration watcher) the swap pair, one thread
+// (the calibration runner) the calibration calls; any thread
 // may call latest(), timing(), clear_fault(), running() and now_s().
 
 #include <atomic>
@@ -28,6 +38,7 @@
 #include <thread>
 #include <vector>
 
+#include "swivel/plugin/calibration.hpp"
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
@@ -45,6 +56,15 @@ struct LoopOptions {
   int fifo_priority = 80;          ///< SCHED_FIFO priority where permitted
   bool realtime = true;            ///< try SCHED_FIFO, mlockall and /dev/cpu_dma_latency
   double command_timeout_s = 0.5;  ///< older velocity commands stop the robot
+};
+
+/// How a calibration handed back by the loop ended.
+enum class CalibrationOutcome : std::uint8_t {
+  kNone = 0,       ///< nothing handed back
+  kFinished = 1,   ///< every run recorded: analyse it
+  kFailed = 2,     ///< the procedure or another fault stopped it
+  kCancelled = 3,  ///< cancel_calibration() or the loop stopping
+  kRefused = 4,    ///< a fault was latched when the loop would have started it
 };
 
 class ControlLoop {
@@ -115,6 +135,33 @@ class ControlLoop {
     return active_localization_.load(std::memory_order_acquire);
   }
 
+  /// The calibrating thread only. Real-time safe. Hands `calibration` (configured off the
+  /// loop; it must outlive its hand-back) to the loop, which starts it at its next cycle
+  /// boundary. False for null or while a previous calibration has not been handed back
+  /// with take_finished_calibration().
+  bool start_calibration(Calibration* calibration) noexcept;
+
+  /// The calibrating thread only. Real-time safe. Stops a running calibration with zero
+  /// setpoints at the next cycle (mode kIdle); one not yet taken by the loop is handed back
+  /// at once. Does nothing when no calibration is in flight.
+  void cancel_calibration() noexcept;
+
+  /// The calibrating thread only. Real-time safe. The calibration the loop let go of (it
+  /// will never be called again: analyse it and destroy it off the loop), or nullptr while
+  /// none is; `outcome` (optional) receives how it ended.
+  Calibration* take_finished_calibration(CalibrationOutcome* outcome = nullptr) noexcept;
+
+  /// Any thread. Real-time safe. True from start_calibration() until the instance is
+  /// taken back.
+  [[nodiscard]] bool calibration_in_flight() const noexcept {
+    return calibration_in_flight_.load(std::memory_order_acquire);
+  }
+
+  /// Any thread. Real-time safe. The calibration the loop is running now, or nullptr.
+  [[nodiscard]] Calibration* active_calibration() const noexcept {
+    return active_calibration_.load(std::memory_order_acquire);
+  }
+
   /// Any thread. Real-time safe. Requests leaving kSafeStop: honoured at the first cycle
   /// without a fault (the request waits while the cause persists). Ignored when no fault
   /// is latched.
@@ -137,6 +184,9 @@ class ControlLoop {
   void thread_main(std::promise<std::string>& scheduling_warning) noexcept;
   void cycle(double now_s, bool final_stop) noexcept;
   void take_pending_swap(double now_s) noexcept;
+  void take_pending_calibration(double now_s) noexcept;
+  bool step_calibration(double now_s, bool final_stop) noexcept;
+  void retire_calibration(CalibrationOutcome outcome, double now_s) noexcept;
   void raise_fault(FaultCode code, double now_s, const char* detail) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
@@ -161,6 +211,12 @@ class ControlLoop {
   std::atomic<Localization*> pending_localization_{nullptr};
   std::atomic<Localization*> retired_localization_{nullptr};
   ShortName pending_name_{};  // written before pending_localization_ is published
+  std::atomic<Calibration*> pending_calibration_{nullptr};
+  std::atomic<Calibration*> active_calibration_{nullptr};  // written by the loop only
+  std::atomic<Calibration*> retired_calibration_{nullptr};
+  std::atomic<CalibrationOutcome> retired_outcome_{CalibrationOutcome::kNone};
+  std::atomic<bool> calibration_in_flight_{false};  // written by the calibrating thread
+  std::atomic<bool> cancel_calibration_{false};
   SpscRing<VelocityCommand, 64> commands_;
   SpscRing<MotionCaptureSample, 64> motion_capture_;
   SnapshotBuffer<StateSnapshot> snapshot_;

@@ -59,6 +59,10 @@ struct StateSnapshot {
   std::uint64_t localization_swaps = 0;   ///< hot swaps taken by the loop
   bool has_truth = false;                 ///< simulation: the true pose is known
   Pose2 truth;
+  /// The cycle's raw hardware reading (for run logs): cumulative encoder angles, rad, and
+  /// measured steering angles, rad, per module.
+  std::array<double, kMaxModules> wheel_angle_rad{};
+  std::array<double, kMaxModules> steer_angle_rad{};
 };
 
 static_assert(std::is_trivially_copyable_v<VelocityCommand>);
