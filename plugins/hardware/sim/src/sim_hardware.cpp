@@ -2,7 +2,10 @@
 
 #include <climits>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +15,59 @@
 #include "swivel/robot_model_io.hpp"
 
 namespace swivel::plugins {
+namespace {
+
+bool is_wheel_kind(SimFaultKind kind) noexcept {
+  return kind == SimFaultKind::kNanWheel || kind == SimFaultKind::kOutOfRangeWheel ||
+         kind == SimFaultKind::kFrozenEncoder;
+}
+
+std::string kind_list() {
+  std::string list;
+  for (const char* name : kSimFaultKindNames) {
+    list += (list.empty() ? "" : ", ") + std::string(name);
+  }
+  return list;
+}
+
+// One entry of params.faults. `modules` is the robot's module count.
+SimFault parse_fault(ParamReader& f, std::size_t modules) {
+  SimFault fault;
+  const std::string kind_name = f.string("kind");
+  const std::optional<SimFaultKind> kind = sim_fault_kind(kind_name.c_str());
+  if (!kind) {
+    f.fail("kind", "unknown fault kind '" + kind_name + "' (expected one of: " + kind_list() + ")");
+  }
+  fault.kind = *kind;
+  fault.start_s = f.number("start_s", 0.0, 1e9);
+  fault.duration_s = f.number("duration_s", 0.0, 1e9);
+  if (!(fault.duration_s > 0.0)) f.fail("duration_s", "expected a positive number, got 0");
+  if (f.has("module")) {
+    if (!is_wheel_kind(fault.kind)) {
+      f.fail("module", "applies only to nan_wheel, out_of_range_wheel and frozen_encoder");
+    }
+    fault.module = static_cast<std::uint32_t>(
+        f.integer("module", 0, static_cast<int>(modules) - 1));
+  }
+  if (f.has("value")) {
+    if (fault.kind != SimFaultKind::kOutOfRangeWheel) {
+      f.fail("value", "applies only to out_of_range_wheel");
+    }
+    fault.value_rad = f.number("value", -1e6, 1e6);
+  }
+  f.finish();
+  return fault;
+}
+
+}  // namespace
+
+std::optional<SimFaultKind> sim_fault_kind(const char* name) noexcept {
+  if (name == nullptr) return std::nullopt;
+  for (std::size_t i = 0; i < kSimFaultKindNames.size(); ++i) {
+    if (std::strcmp(name, kSimFaultKindNames[i]) == 0) return static_cast<SimFaultKind>(i);
+  }
+  return std::nullopt;
+}
 
 void SimHardware::configure(const PluginContext& ctx) {
   if (ctx.robot == nullptr) throw ConfigError("sim hardware: no robot model");
@@ -29,6 +85,19 @@ void SimHardware::configure(const PluginContext& ctx) {
   ns.correlation_time_s =
       slip.number_or("correlation_time_s", ns.correlation_time_s, 1e-3, 1e3);
   slip.finish();
+  const YAML::Node fault_list = params.sequence("faults");
+  if (fault_list.size() > kMaxFaults) {
+    // snprintf, not std::to_string: see param_reader.cpp (keeps the plugin unloadable).
+    char text[64];
+    std::snprintf(text, sizeof text, "expected at most %zu faults, got %zu", kMaxFaults,
+                  fault_list.size());
+    params.fail("faults", text);
+  }
+  std::array<ActiveFault, kMaxFaults> faults{};
+  for (std::size_t i = 0; i < fault_list.size(); ++i) {
+    ParamReader f = params.element(fault_list, "faults", i);
+    faults[i].fault = parse_fault(f, ctx.robot->module_count());
+  }
   params.finish();
 
   RobotModel truth = *ctx.robot;
@@ -52,6 +121,88 @@ void SimHardware::configure(const PluginContext& ctx) {
   command_ = ActuatorCommand{};
   command_.module_count = static_cast<std::uint32_t>(truth.module_count());
   started_ = false;
+  start_stamp_s_ = 0.0;
+  last_stamp_s_ = 0.0;
+  faults_ = faults;
+  fault_count_ = fault_list.size();
+  last_wheel_rad_ = {};
+  injection_pending_.store(false, std::memory_order_release);
+}
+
+bool SimHardware::active(const SimFault& fault, double t_s) const noexcept {
+  return t_s >= fault.start_s && t_s < fault.start_s + fault.duration_s;
+}
+
+void SimHardware::take_injection(double t_s) noexcept {
+  if (!injection_pending_.load(std::memory_order_acquire)) return;
+  SimFault fault = injected_;
+  fault.start_s = t_s;
+  std::size_t slot = fault_count_;
+  for (std::size_t i = 0; i < fault_count_; ++i) {
+    const SimFault& old = faults_[i].fault;
+    if (t_s >= old.start_s + old.duration_s) {  // expired: reuse
+      slot = i;
+      break;
+    }
+  }
+  if (slot < kMaxFaults) {
+    faults_[slot] = ActiveFault{fault, false, 0.0};
+    if (slot == fault_count_) ++fault_count_;
+  } else {
+    injections_dropped_.fetch_add(1, std::memory_order_relaxed);
+  }
+  injection_pending_.store(false, std::memory_order_release);
+}
+
+Status SimHardware::apply_faults(double t_s, HardwareState& out) noexcept {
+  for (std::size_t i = 0; i < fault_count_; ++i) {
+    ActiveFault& a = faults_[i];
+    if (!active(a.fault, t_s)) {
+      a.frozen = false;  // a later window captures afresh
+      continue;
+    }
+    const std::uint32_t m = a.fault.module;
+    switch (a.fault.kind) {
+      case SimFaultKind::kNanWheel:
+        out.wheel_angle_rad[m] = std::numeric_limits<double>::quiet_NaN();
+        break;
+      case SimFaultKind::kInfGyro:
+        out.gyro_wz_radps = std::numeric_limits<double>::infinity();
+        break;
+      case SimFaultKind::kOutOfRangeWheel:
+        out.wheel_angle_rad[m] += a.fault.value_rad;
+        break;
+      case SimFaultKind::kFrozenEncoder:
+        if (!a.frozen) {
+          a.frozen = true;
+          a.frozen_rad = last_wheel_rad_[m];
+        }
+        out.wheel_angle_rad[m] = a.frozen_rad;
+        break;
+      case SimFaultKind::kGyroDropout:
+        out.gyro_valid = false;
+        out.gyro_wz_radps = 0.0;
+        break;
+      case SimFaultKind::kStall:
+      case SimFaultKind::kReadError:
+      case SimFaultKind::kWriteError:
+        break;  // handled before the reading / in write()
+    }
+  }
+  last_wheel_rad_ = out.wheel_angle_rad;
+  return Status::kOk;
+}
+
+bool SimHardware::inject_fault(SimFaultKind kind, double duration_s, std::uint32_t module,
+                               double value_rad) noexcept {
+  if (!std::isfinite(duration_s) || !(duration_s > 0.0) || !std::isfinite(value_rad)) {
+    return false;
+  }
+  if (is_wheel_kind(kind) && module >= command_.module_count) return false;
+  if (injection_pending_.load(std::memory_order_acquire)) return false;
+  injected_ = SimFault{kind, 0.0, duration_s, is_wheel_kind(kind) ? module : 0U, value_rad};
+  injection_pending_.store(true, std::memory_order_release);
+  return true;
 }
 
 Status SimHardware::read(double stamp_s, HardwareState& out) noexcept {
@@ -77,17 +228,42 @@ Status SimHardware::read(double stamp_s, HardwareState& out) noexcept {
     return Status::kError;
   }
   last_stamp_s_ = stamp_s;
+  const double t_s = stamp_s - start_stamp_s_;
+  take_injection(t_s);
+  // A device that does not answer leaves nothing to read: the world moved on, `out` is
+  // untouched and the gyro's next rate averages over the silence.
+  for (std::size_t i = 0; i < fault_count_; ++i) {
+    const SimFault& f = faults_[i].fault;
+    if (f.kind == SimFaultKind::kStall && active(f, t_s)) {
+      last_error_ = "sim: hardware not answering";
+      return Status::kError;
+    }
+    if (f.kind == SimFaultKind::kReadError && active(f, t_s)) {
+      last_error_ = "sim: injected read error";
+      return Status::kError;
+    }
+  }
   world_->read(out);
   // The world counts from zero; readers expect the daemon's clock.
   out.stamp_s = stamp_s;
   out.motion_capture.stamp_s += start_stamp_s_;
-  return Status::kOk;
+  return apply_faults(t_s, out);
 }
 
 Status SimHardware::write(const ActuatorCommand& command) noexcept {
   if (!world_) {
     last_error_ = "sim: not configured";
     return Status::kError;
+  }
+  if (started_) {
+    const double t_s = last_stamp_s_ - start_stamp_s_;
+    for (std::size_t i = 0; i < fault_count_; ++i) {
+      const SimFault& f = faults_[i].fault;
+      if (f.kind == SimFaultKind::kWriteError && active(f, t_s)) {
+        last_error_ = "sim: injected write error";
+        return Status::kError;
+      }
+    }
   }
   if (command.module_count != command_.module_count) {
     last_error_ = "sim: command module count differs from the robot's";
@@ -116,6 +292,19 @@ bool SimHardware::ground_truth(Pose2& out) const noexcept {
 }
 
 }  // namespace swivel::plugins
+
+// The run-time injection hook for code that holds only the plugin instance (see the header).
+extern "C" __attribute__((visibility("default"))) int swivel_sim_inject_fault(
+    void* hardware, const char* kind, double duration_s, unsigned module, double value) {
+  auto* sim = dynamic_cast<swivel::plugins::SimHardware*>(static_cast<swivel::Hardware*>(hardware));
+  if (sim == nullptr) return 1;
+  const std::optional<swivel::plugins::SimFaultKind> k = swivel::plugins::sim_fault_kind(kind);
+  if (!k) return 2;
+  if (sim->world() == nullptr) return 1;
+  if (!std::isfinite(duration_s) || !(duration_s > 0.0) || !std::isfinite(value)) return 3;
+  if (swivel::plugins::is_wheel_kind(*k) && module >= sim->world()->plant().module_count) return 3;
+  return sim->inject_fault(*k, duration_s, module, value) ? 0 : 4;
+}
 
 #ifndef SWIVEL_SIM_NO_EXPORT
 SWIVEL_EXPORT_PLUGIN(swivel::plugins::SimHardware, swivel::Hardware, "sim")

@@ -1,0 +1,163 @@
+// Rows of docs/faults.md for plugins that fail on the loop (an error status, an exception)
+// and plugin libraries that cannot be loaded when a hot swap is prepared.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "fault_rig.hpp"
+
+namespace swivel::faults {
+namespace {
+
+constexpr double kVxMps = 0.3;
+
+// Takes `next` in a hot swap at the next cycle and destroys the outgoing instance off the
+// loop, as the daemon does.
+void swap_to(FaultRig& rig, PluginInstance<Localization>& next, const char* name) {
+  ASSERT_TRUE(rig.loop->request_localization_swap(next.get(), name));
+  rig.step();
+  ASSERT_EQ(rig.loop->take_retired_localization(), rig.localization.get());
+  rig.localization = std::move(next);
+}
+
+// A localization that fails on the loop from its 301st update on: stop in that cycle, the
+// cause in the log, no recovery while the plugin keeps failing (not even on request), and
+// recovery once a working instance is swapped in and the fault cleared.
+void run_failing_localization_row(const std::string& plugin, const std::string& params,
+                                  const std::string& cause) {
+  RigOptions options;
+  options.localization = plugin;
+  options.localization_params = params;
+  FaultRig rig(options);
+  // update() runs from the second cycle on (the first has no previous reading).
+  rig.drive(kVxMps, 0.0, 0.0, 301);
+  const StateSnapshot before = rig.state();
+  ASSERT_EQ(before.mode, LoopMode::kVelocity);
+  ASSERT_EQ(before.fault_count, 0U);
+
+  rig.drive(kVxMps, 0.0, 0.0, 1);
+  const StateSnapshot hit = rig.state();
+  EXPECT_EQ(hit.cycle, before.cycle + 1);
+  EXPECT_EQ(hit.mode, LoopMode::kSafeStop);
+  EXPECT_EQ(hit.fault, FaultCode::kLocalizationError);
+  EXPECT_EQ(hit.fault_count, 1U);
+  EXPECT_EQ(max_wheel_setpoint(hit), 0.0);
+  EXPECT_NE(rig.log().find("fault localization_error (#1): safe stop (" + cause + ")"),
+            std::string::npos)
+      << rig.log();
+
+  rig.loop->clear_fault();  // the cause persists: the request waits
+  rig.drive(kVxMps, 0.0, 0.0, 200);
+  EXPECT_EQ(rig.state().cycle, hit.cycle + 200);
+  EXPECT_EQ(rig.state().mode, LoopMode::kSafeStop);
+  EXPECT_EQ(rig.state().fault_count, 1U);
+  EXPECT_EQ(max_wheel_setpoint(rig.state()), 0.0);
+
+  auto working = rig.make_localization("raw_eg", "{}");
+  swap_to(rig, working, "raw_eg");  // the pending clear is honoured at this clean cycle
+  EXPECT_EQ(rig.state().mode, LoopMode::kIdle);
+  EXPECT_EQ(rig.state().fault, FaultCode::kNone);
+  EXPECT_STREQ(rig.state().localization_plugin.data(), "raw_eg");
+  rig.drive(kVxMps, 0.0, 0.0, 50);
+  EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
+  EXPECT_EQ(rig.state().fault_count, 1U);
+}
+
+TEST(PluginFaults, LocalizationReturningErrorStopsUntilReplaced) {
+  run_failing_localization_row("update_error", "{fail_after_cycles: 300}",
+                               "estimate diverged (planted failure)");
+}
+
+TEST(PluginFaults, LocalizationThrowingIsCaughtAtTheLoopBoundary) {
+  run_failing_localization_row("throws_update", "{throw_after_cycles: 300}",
+                               "plugin threw an exception on the real-time loop");
+}
+
+// A swap prepared while the loop runs: the loader refuses, the loop never sees it.
+void expect_loop_unaffected(FaultRig& rig, const StateSnapshot& before) {
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const StateSnapshot after = rig.state();
+  EXPECT_EQ(after.cycle, before.cycle + 100);
+  EXPECT_EQ(after.mode, LoopMode::kVelocity);
+  EXPECT_EQ(after.fault_count, 0U);
+  EXPECT_EQ(after.localization_swaps, 0U);
+  EXPECT_STREQ(after.localization_plugin.data(), "raw_eg");
+  EXPECT_EQ(rig.loop->active_localization(), rig.localization.get());
+  EXPECT_GT(distance_m(after.estimate.pose, before.estimate.pose), kVxMps * 0.09);
+  EXPECT_LT(distance_m(after.estimate.pose, after.truth), 0.005);
+}
+
+TEST(PluginFaults, LibraryMissingAtSwapTimeLeavesTheRunningInstance) {
+  // The running raw_eg came from a folder whose library file is then deleted (an upgrade
+  // gone wrong): preparing a new instance fails, the mapped library keeps running.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "swivel_faults_missing_library";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  FaultRig rig;
+  std::filesystem::copy_file(rig.localization.path(), dir / "swivel_localization_raw_eg.so");
+  PluginLoader from_dir({dir.string()});
+  auto running = from_dir.create<Localization>("raw_eg");
+  running->configure(plugin_context("{}", "localization.params", rig.robot));
+  running->reset(PoseEstimate{});
+  swap_to(rig, running, "raw_eg");
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const std::uint64_t swaps = rig.state().localization_swaps;
+  std::filesystem::remove(dir / "swivel_localization_raw_eg.so");
+
+  const StateSnapshot before = rig.state();
+  try {
+    (void)from_dir.create<Localization>("raw_eg");
+    FAIL() << "no PluginError";
+  } catch (const PluginError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "localization plugin 'raw_eg' not found: no swivel_localization_raw_eg.so in " +
+                  dir.string() + " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
+  }
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const StateSnapshot after = rig.state();
+  EXPECT_EQ(after.cycle, before.cycle + 100);
+  EXPECT_EQ(after.mode, LoopMode::kVelocity);
+  EXPECT_EQ(after.fault_count, 0U);
+  EXPECT_EQ(after.localization_swaps, swaps);
+  EXPECT_EQ(rig.loop->active_localization(), rig.localization.get());
+  EXPECT_GT(distance_m(after.estimate.pose, before.estimate.pose), kVxMps * 0.09);
+  rig.loop.reset();
+  rig.localization.reset();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(PluginFaults, WrongAbiAtSwapTimeIsRefusedAndTheLoopRunsOn) {
+  FaultRig rig;
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const StateSnapshot before = rig.state();
+  try {
+    (void)rig.make_localization("bad_abi", "{}");
+    FAIL() << "no PluginError";
+  } catch (const PluginError& e) {
+    EXPECT_EQ(std::string(e.what()), test_plugin_dir() +
+                                         "/swivel_localization_bad_abi.so: ABI version 999, "
+                                         "expected 1 (rebuild the plugin)");
+  }
+  expect_loop_unaffected(rig, before);
+}
+
+TEST(PluginFaults, WrongKindAtSwapTimeIsRefusedAndTheLoopRunsOn) {
+  FaultRig rig;
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const StateSnapshot before = rig.state();
+  try {
+    (void)rig.make_localization("wrong_kind", "{}");
+    FAIL() << "no PluginError";
+  } catch (const PluginError& e) {
+    EXPECT_EQ(std::string(e.what()), test_plugin_dir() +
+                                         "/swivel_localization_wrong_kind.so: kind 'drivetrain', "
+                                         "expected 'localization'");
+  }
+  expect_loop_unaffected(rig, before);
+}
+
+}  // namespace
+}  // namespace swivel::faults
