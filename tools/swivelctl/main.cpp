@@ -11,6 +11,7 @@
 #include <string>
 #include <thread>
 
+#include "calibrate.hpp"
 #include "client.hpp"
 #include "format.hpp"
 #include "swivel.h"
@@ -324,6 +325,8 @@ int main(int argc, char** argv) {
 
   CLI::App* reload = app.add_subcommand("reload", "ask a daemon to re-read its configuration");
   add_common(reload, true);
+
+  add_calibrate_command(app);
 
   CLI11_PARSE(app, argc, argv);
   install_signal_handlers();
