@@ -1,0 +1,95 @@
+#include "gap_fixtures.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+
+#include "swivel/robot_model_io.hpp"
+#include "swivel/sim/open_loop.hpp"
+#include "swivel/sim/world.hpp"
+
+namespace swivel::model_gap::testing {
+namespace {
+
+// Piecewise-linear profile through (time, value) knots; ramps keep accelerations finite.
+double knots(double t, std::initializer_list<std::pair<double, double>> points) {
+  auto prev = *points.begin();
+  for (const auto& p : points) {
+    if (t <= p.first) {
+      if (p.first <= prev.first) return p.second;
+      return prev.second + (t - prev.first) / (p.first - prev.first) * (p.second - prev.second);
+    }
+    prev = p;
+  }
+  return prev.second;
+}
+
+}  // namespace
+
+RobotModel robot(const std::string& name) {
+  const char* dir = std::getenv("SWIVEL_SOURCE_DIR");
+  const std::string root = dir != nullptr ? dir : SWIVEL_SOURCE_DIR_FALLBACK;
+  return load_robot_model(root + "/config/robots/" + name + ".yaml");
+}
+
+Twist2 pattern_command(double t_s, bool holonomic) {
+  const double t = std::fmod(t_s, 20.0);
+  Twist2 c;
+  c.vx_mps = knots(t, {{1.5, 0.0}, {2.5, 0.4}, {6.0, 0.4}, {6.5, 0.3}, {9.0, 0.3}, {9.5, 0.2},
+                       {10.5, 0.2}, {11.0, 0.0}, {14.0, 0.0}, {14.5, 0.5}, {17.0, 0.5},
+                       {18.0, 0.0}});
+  c.wz_radps = knots(t, {{6.0, 0.0}, {6.5, 0.6}, {8.5, 0.6}, {9.0, 0.0}, {11.0, 0.0},
+                         {11.5, -0.8}, {13.5, -0.8}, {14.0, 0.0}, {14.5, 0.2}, {17.0, 0.2},
+                         {17.5, 0.0}});
+  if (holonomic) {
+    c.vy_mps = knots(t, {{2.5, 0.0}, {3.0, 0.15}, {5.5, 0.15}, {6.0, 0.0}, {14.0, 0.0},
+                         {14.5, -0.25}, {16.5, -0.25}, {17.0, 0.0}});
+  }
+  return c;
+}
+
+RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double duration_s,
+                    std::uint64_t seed, double rate_hz) {
+  sim::SimOptions options;
+  options.seed = seed;
+  const bool swpc = nominal.drivetrain == DrivetrainKind::kSwpc;
+  // The casters start trailing the first motion, as `swivel-lab simulate` starts them.
+  options.initial_steer_rad = sim::aligned_steer_angles(sim::resolve_plant(truth), pattern_command(2.0, swpc));
+  sim::World world(truth, options);
+  RunLog log;
+  log.source = "simulated";
+  log.header = run_log_header(nominal);
+  const auto rows = static_cast<std::size_t>(std::llround(duration_s * rate_hz)) + 1;
+  const double dt = 1.0 / rate_hz;
+  const sim::OpenLoopController controller(nominal);
+  HardwareState hw;
+  ActuatorCommand command;
+  for (std::size_t k = 0; k < rows; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    world.read(hw);
+    hw.stamp_s = t;
+    const Twist2 twist = pattern_command(t, swpc);
+    log.samples.push_back(sim::make_run_log_sample(hw, twist));
+    controller.velocity(twist, hw, command);
+    if (k + 1 < rows && world.step(dt, command) != Status::kOk) {
+      throw std::runtime_error(world.last_error());
+    }
+  }
+  return log;
+}
+
+void add_eccentric_wheel(RunLog& log, double amplitude) {
+  // Ground travel r (psi + a sin psi) equals the simulated r psi_sim: solve for the angle the
+  // encoder would have read (Newton, from the simulated angle).
+  for (RunLogSample& s : log.samples) {
+    const double target = s.wheel_rad[0];
+    double psi = target;
+    for (int it = 0; it < 20; ++it) {
+      psi -= (psi + amplitude * std::sin(psi) - target) / (1.0 + amplitude * std::cos(psi));
+    }
+    s.wheel_rad[0] = psi;
+  }
+}
+
+}  // namespace swivel::model_gap::testing
