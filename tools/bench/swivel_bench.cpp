@@ -1,10 +1,8 @@
-// swivel-bench loop: how much wake-up lateness the control loop adds to what the machine
+// swivel-bench loop (swap: see swap_bench.hpp): how much wake-up lateness the control loop adds to what the machine
 // itself delivers. Phase (a) runs a bare clock_nanosleep loop at the same period and
 // scheduling (the floor); phase (b) runs the ControlLoop with the docent plugins (sim,
 // differential, raw_eg) loaded like the daemon loads them, or in-process fakes when they
 // cannot be loaded. Both phases run in this one process, one after the other.
-
-#include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -18,9 +16,8 @@
 #include <thread>
 #include <vector>
 
-#include "fake_plugins.hpp"
-#include "swivel/plugin_loader.hpp"
-#include "swivel/robot_model_io.hpp"
+#include "bench_plugins.hpp"
+#include "swap_bench.hpp"
 #include "swivel/rt/control_loop.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/timing_stats.hpp"
@@ -77,84 +74,18 @@ void run_floor(const Settings& s, FloorResult& result) {
   thread.join();
 }
 
-// The plugins the loop runs with: the real ones when they load, else fakes.
-struct Plugins {
-  swivel::RobotModel robot;
-  swivel::PluginInstance<swivel::Hardware> hardware;
-  swivel::PluginInstance<swivel::Drivetrain> drivetrain;
-  swivel::PluginInstance<swivel::Localization> localization;
-  swivel::test::FakeHardware fake_hardware;
-  swivel::test::FakeDrivetrain fake_drivetrain;
-  swivel::test::FakeLocalization fake_localization;
-  bool real = false;
-  std::string description;
-
-  swivel::Hardware& hw() { return real ? *hardware : fake_hardware; }
-  swivel::Drivetrain& dt() { return real ? *drivetrain : fake_drivetrain; }
-  swivel::Localization& loc() { return real ? *localization : fake_localization; }
-};
-
-template <class Interface>
-swivel::PluginInstance<Interface> load_slot(swivel::PluginLoader& loader, const YAML::Node& root,
-                                            const char* slot, const std::string& config_file,
-                                            const std::filesystem::path& config_dir,
-                                            const swivel::RobotModel& robot, double period_s) {
-  const std::string name = root[slot]["plugin"].as<std::string>();
-  auto instance = loader.create<Interface>(name);
-  swivel::PluginContext ctx;
-  ctx.params = root[slot]["params"];
-  ctx.config_file = config_file;
-  ctx.params_path = std::string(slot) + ".params";
-  ctx.config_dir = config_dir.string();
-  ctx.robot = &robot;
-  ctx.period_s = period_s;
-  instance->configure(ctx);
-  return instance;
-}
-
-void load_plugins(const Settings& s, Plugins& p) {
-  if (s.fakes) {
-    p.description = "in-process fakes (--fakes)";
-    return;
-  }
-  try {
-    const YAML::Node root = YAML::LoadFile(s.config);
-    const std::filesystem::path dir = std::filesystem::path(s.config).parent_path();
-    p.robot = swivel::load_robot_model((dir / root["robot_model"].as<std::string>()).string());
-    swivel::PluginLoader loader(swivel::PluginLoader::default_search_path());
-    const double period_s = 1.0 / s.rate_hz;
-    p.hardware =
-        load_slot<swivel::Hardware>(loader, root, "hardware", s.config, dir, p.robot, period_s);
-    p.drivetrain =
-        load_slot<swivel::Drivetrain>(loader, root, "drivetrain", s.config, dir, p.robot, period_s);
-    p.localization = load_slot<swivel::Localization>(loader, root, "localization", s.config, dir,
-                                                     p.robot, period_s);
-    p.localization->reset(swivel::PoseEstimate{});
-    p.real = true;
-    p.description = "plugins " + p.hardware.name() + " / " + p.drivetrain.name() + " / " +
-                    p.localization.name() + ", robot " + p.robot.name + " (" + s.config + ")";
-  } catch (const std::exception& e) {
-    p.hardware.reset();
-    p.drivetrain.reset();
-    p.localization.reset();
-    p.description =
-        std::string("in-process FAKE plugins: the real ones could not be loaded: ") + e.what();
-  }
-}
-
 struct LoopResult {
   swivel::rt::TimingReport timing;
   swivel::StateSnapshot last;
   std::vector<std::string> warnings;
 };
 
-void run_loop(const Settings& s, Plugins& p, LoopResult& result) {
+void run_loop(const Settings& s, swivel::bench::Plugins& p, LoopResult& result) {
   swivel::rt::LoopOptions options;
   options.rate_hz = s.rate_hz;
   options.fifo_priority = s.priority;
   options.realtime = s.realtime;
-  swivel::rt::ControlLoop loop(options, p.hw(), p.dt(), p.loc(),
-                               p.real ? p.localization.name().c_str() : "fake");
+  swivel::rt::ControlLoop loop(options, p.hw(), p.dt(), p.loc(), p.localization_name().c_str());
   result.warnings = loop.start();
   // A command source like the daemon's script: 50 Hz, driving a gentle curve.
   std::uint64_t sequence = 0;
@@ -191,8 +122,8 @@ int run(const Settings& s) {
                             ", mlockall, cpu_dma_latency 0")
                                .c_str()
                          : "real-time not requested (SCHED_OTHER)");
-  Plugins plugins;
-  load_plugins(s, plugins);
+  swivel::bench::Plugins plugins;
+  swivel::bench::load_plugins(s.config, s.rate_hz, s.fakes, plugins);
   std::printf("loop phase runs: %s\n", plugins.description.c_str());
 
   // Process-wide settings held for both phases so that they are measured alike.
@@ -256,8 +187,23 @@ int main(int argc, char** argv) {
   loop->add_flag("--fakes", settings.fakes, "use in-process fake plugins");
   loop->add_option("--config", settings.config, "daemon configuration naming the plugins")
       ->check(CLI::ExistingFile);
+  swivel::bench::SwapSettings swap_settings;
+  swap_settings.config = SWIVEL_DEFAULT_CONFIG;
+  auto* swap = app.add_subcommand(
+      "swap", "localization hot swaps on the running loop: request to the new plugin's first update");
+  swap->add_option("--swaps", swap_settings.swaps, "swaps to time (kalman, lsm, raw_eg in turn)")
+      ->check(CLI::Range(1, 100000));
+  swap->add_option("--interval-s", swap_settings.interval_s, "pause between swaps, s")
+      ->check(CLI::Range(0.0, 10.0));
+  swap->add_option("--rate-hz", swap_settings.rate_hz, "loop rate, Hz")
+      ->check(CLI::Range(1.0, 10000.0));
+  swap->add_flag("!--no-realtime", swap_settings.realtime,
+                 "do not try SCHED_FIFO, mlockall or cpu_dma_latency");
+  swap->add_option("--config", swap_settings.config, "daemon configuration naming the plugins")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   try {
+    if (swap->parsed()) return swivel::bench::run_swap(swap_settings);
     return run(settings);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "swivel-bench: %s\n", e.what());
