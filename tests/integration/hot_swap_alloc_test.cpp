@@ -1,6 +1,7 @@
-// The real plugins (sim, differential, raw_eg, then kalman and lsm swapped in), loaded
-// through PluginLoader as the daemon loads them, on a ControlLoop driven by run_cycle() on a
-// dedicated thread: over more than 10,000 cycles with three hot swaps, that thread makes no
+// The real plugins (sim, the robot's drivetrain, raw_eg, then kalman and lsm swapped in),
+// loaded through PluginLoader as the daemon loads them, on a ControlLoop driven by
+// run_cycle() on a dedicated thread, for both robots (docent: differential; swpc4: four
+// powered casters): over more than 10,000 cycles with three hot swaps, that thread makes no
 // heap allocation, and the pose stays continuous across each swap.
 
 #include <gtest/gtest.h>
@@ -43,11 +44,19 @@ PluginInstance<Interface> make(PluginLoader& loader, const std::string& name,
   return plugin;
 }
 
-TEST(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
-  const RobotModel robot = load_robot_model(source_dir() + "/config/robots/docent.yaml");
+struct Robot {
+  const char* model;       // config/robots/<model>.yaml
+  const char* drivetrain;  // its drivetrain plugin
+};
+
+class HotSwapAllocation : public ::testing::TestWithParam<Robot> {};
+
+TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
+  const RobotModel robot =
+      load_robot_model(source_dir() + "/config/robots/" + GetParam().model + ".yaml");
   PluginLoader loader(PluginLoader::default_search_path());
   auto hardware = make<Hardware>(loader, "sim", "{seed: 7}", robot);
-  auto drivetrain = make<Drivetrain>(loader, "differential", "{}", robot);
+  auto drivetrain = make<Drivetrain>(loader, GetParam().drivetrain, "{}", robot);
   auto localization = make<Localization>(loader, "raw_eg", "{heading_source: gyro}", robot);
   localization->reset(PoseEstimate{});
 
@@ -135,7 +144,17 @@ TEST(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   // Continuous pose across the swaps: no step larger than one cycle's travel plus noise.
   EXPECT_LT(max_step_m, kSpeedMps / kRateHz + 1e-3);
   EXPECT_GT(last.estimate.pose.x_m, 0.5);  // it did drive
+  // Every plugin tracked the (nominal = true) robot: raw_eg on encoders at the end.
+  EXPECT_LT(std::hypot(last.estimate.pose.x_m - last.truth.x_m,
+                       last.estimate.pose.y_m - last.truth.y_m),
+            0.05);
 }
+
+INSTANTIATE_TEST_SUITE_P(BothRobots, HotSwapAllocation,
+                         ::testing::Values(Robot{"docent", "differential"}, Robot{"swpc4", "swpc"}),
+                         [](const ::testing::TestParamInfo<Robot>& robot) {
+                           return std::string(robot.param.model);
+                         });
 
 }  // namespace
 }  // namespace swivel::test

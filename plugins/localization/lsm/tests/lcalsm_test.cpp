@@ -126,6 +126,28 @@ TEST(Lcalsm, FallsBackToEgOnTurns) {
   }
 }
 
+TEST(Lcalsm, HeadingAlignedFollowsAGentleCurve) {
+  // An arc of radius 3 m sampled every 0.02 m turns 0.06 rad across a 10-point window: no
+  // window shows a turn, yet the path leaves the line it set out on. Flattening it onto that
+  // line would be off by the arc's sagitta (0.13 m after 0.9 m); a new segment starts once the
+  // heading has left the segment's by 0.1 rad, so the output stays within the sagitta of a
+  // 0.1 rad arc (3 m x (1 - cos 0.1) = 15 mm).
+  Lcalsm lsm;
+  lsm.configure(every_sample(LsmMode::kHeadingAligned));
+  constexpr double kRadiusM = 3.0;
+  double max_error_m = 0.0;
+  for (int j = 0; j <= 150; ++j) {
+    const double along_m = 0.02 * j;
+    const double yaw = along_m / kRadiusM;
+    const Pose2 eg{kRadiusM * std::sin(yaw), kRadiusM * (1.0 - std::cos(yaw)), yaw};
+    lsm.push(eg, yaw, along_m, 0.0);
+    EXPECT_FALSE(lsm.in_turn()) << j;
+    const Pose2 out = lsm.output(eg);
+    max_error_m = std::max(max_error_m, std::hypot(out.x_m - eg.x_m, out.y_m - eg.y_m));
+  }
+  EXPECT_LT(max_error_m, 0.016);
+}
+
 TEST(Lcalsm, StorageIsFixedAndDecimatedByDistance) {
   static_assert(std::is_trivially_copyable_v<Lcalsm>);
   Lcalsm lsm;

@@ -20,7 +20,9 @@
 // the first stored point of the current straight segment, along the E/G heading there. The
 // newest point is projected onto it. This is the paper's straight-line assumption made
 // explicit; it removes slow lateral drift that a k-point fit cannot see, and it is only right
-// when the robot really drives straight.
+// when the robot really drives straight: once the E/G heading differs from the segment's by
+// more than max_window_heading_change_rad (a gentle curve that no single window shows as a
+// turn), a new segment starts at the newest point.
 //
 // Turns: when the E/G heading changes by more than max_window_heading_change_rad across the
 // k newest stored points, nothing is fitted (the window is not a line); the output is then
