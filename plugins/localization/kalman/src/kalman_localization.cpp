@@ -6,6 +6,7 @@
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
+#include "swivel/localization/eg_params.hpp"
 #include "swivel/plugin/abi.hpp"
 
 namespace swivel::plugins {
@@ -20,20 +21,11 @@ constexpr double kBig = 1e6;
 void KalmanLocalization::configure(const PluginContext& ctx) {
   if (ctx.robot == nullptr) throw ConfigError("kalman localization: no robot model");
   const RobotModel& robot = *ctx.robot;
-  if (!std::isfinite(robot.sensors.gyro.scale) || robot.sensors.gyro.scale == 0.0 ||
-      !std::isfinite(robot.sensors.gyro.bias_rad_s)) {
-    throw ConfigError(robot.source_file +
-                      ": sensors.gyro: expected a finite non-zero scale and a finite bias");
-  }
   ParamReader params(ctx.params, ctx.config_file, ctx.params_path);
   KalmanConfig c;
   c.mode = params.choice_or("mode", "ekf", {"ekf", "lcakf"}) == "ekf" ? KalmanMode::kEkf
                                                                       : KalmanMode::kLcakf;
-  c.eg.heading_source = params.choice_or("heading_source", "gyro", {"gyro", "encoders"}) == "gyro"
-                            ? localization::HeadingSource::kGyro
-                            : localization::HeadingSource::kEncoders;
-  c.eg.gyro_scale = robot.sensors.gyro.scale;
-  c.eg.gyro_bias_radps = robot.sensors.gyro.bias_rad_s;
+  c.eg = localization::read_eg_config(params, &robot);
   localization::EkfNoise& n = c.ekf;
   n.translation_m_per_sqrt_m =
       params.number_or("translation_noise_m_per_sqrt_m", n.translation_m_per_sqrt_m, 0.0, 10.0);

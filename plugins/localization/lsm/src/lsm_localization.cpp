@@ -4,6 +4,7 @@
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
+#include "swivel/localization/eg_params.hpp"
 #include "swivel/plugin/abi.hpp"
 
 namespace swivel::plugins {
@@ -24,20 +25,8 @@ void LsmLocalization::configure(const PluginContext& ctx) {
   lsm.sample_period_s = params.number_or("sample_period_s", 0.0, 0.0, 10.0);
   lsm.max_window_heading_change_rad =
       params.number_or("max_window_heading_change_rad", 0.1, 1e-6, 3.2);
-  localization::EgConfig eg;
-  eg.heading_source = params.choice_or("heading_source", "gyro", {"gyro", "encoders"}) == "gyro"
-                          ? localization::HeadingSource::kGyro
-                          : localization::HeadingSource::kEncoders;
+  const localization::EgConfig eg = localization::read_eg_config(params, ctx.robot);
   params.finish();
-  if (ctx.robot != nullptr) {
-    const GyroParams& gyro = ctx.robot->sensors.gyro;
-    if (!std::isfinite(gyro.scale) || gyro.scale == 0.0 || !std::isfinite(gyro.bias_rad_s)) {
-      throw ConfigError(ctx.robot->source_file +
-                        ": sensors.gyro: expected a finite non-zero scale and a finite bias");
-    }
-    eg.gyro_scale = gyro.scale;
-    eg.gyro_bias_radps = gyro.bias_rad_s;
-  }
   configure(eg, lsm);
 }
 

@@ -4,27 +4,15 @@
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
+#include "swivel/localization/eg_params.hpp"
 #include "swivel/plugin/abi.hpp"
 
 namespace swivel::plugins {
 
 void RawEgLocalization::configure(const PluginContext& ctx) {
   ParamReader params(ctx.params, ctx.config_file, ctx.params_path);
-  localization::EgConfig config;
-  config.heading_source =
-      params.choice_or("heading_source", "gyro", {"gyro", "encoders"}) == "gyro"
-          ? localization::HeadingSource::kGyro
-          : localization::HeadingSource::kEncoders;
+  const localization::EgConfig config = localization::read_eg_config(params, ctx.robot);
   params.finish();
-  if (ctx.robot != nullptr) {
-    const GyroParams& gyro = ctx.robot->sensors.gyro;
-    if (!std::isfinite(gyro.scale) || gyro.scale == 0.0 || !std::isfinite(gyro.bias_rad_s)) {
-      throw ConfigError(ctx.robot->source_file +
-                        ": sensors.gyro: expected a finite non-zero scale and a finite bias");
-    }
-    config.gyro_scale = gyro.scale;
-    config.gyro_bias_radps = gyro.bias_rad_s;
-  }
   eg_.set_config(config);
 }
 
