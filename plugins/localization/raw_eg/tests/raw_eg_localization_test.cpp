@@ -51,6 +51,21 @@ TEST(RawEgLocalization, GyroModeCorrectsWithNominalGyroModel) {
   EXPECT_NEAR(loc.estimate().pose.yaw_rad, 1.0 * 0.001, 1e-15);
 }
 
+TEST(RawEgLocalization, RejectsAGyroScaleOfZeroNamingTheRobotModel) {
+  RobotModel robot;
+  robot.source_file = "robots/docent.yaml";
+  robot.sensors.gyro.scale = 0.0;
+  RawEgLocalization loc;
+  try {
+    loc.configure(context(robot, "{}"));
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "robots/docent.yaml: sensors.gyro: expected a finite non-zero scale and a "
+                 "finite bias");
+  }
+}
+
 TEST(RawEgLocalization, HandOverKeepsPoseAndInvalidOdometryIsIgnored) {
   RawEgLocalization loc;
   PoseEstimate handed;
