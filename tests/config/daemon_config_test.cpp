@@ -124,6 +124,38 @@ TEST_F(DaemonConfigTest, DefaultsFillOptionalSections) {
   EXPECT_EQ(c.log_level, "info");
   EXPECT_TRUE(c.plugin_path.empty());
   EXPECT_FALSE(c.dds.IsDefined() && c.dds.IsMap());
+  EXPECT_FALSE(c.has_calibration());
+}
+
+TEST_F(DaemonConfigTest, CalibrationSectionIsOptionalAndValidated) {
+  const std::string with = replaced(
+      kValid, "command:\n", "calibration:\n  plugin: swpc_geometric\n  params: {rotation_deg: 120}\ncommand:\n");
+  const DaemonConfig c = load(with);
+  ASSERT_TRUE(c.has_calibration());
+  EXPECT_EQ(c.calibration.plugin, "swpc_geometric");
+  EXPECT_EQ(c.calibration.params["rotation_deg"].as<int>(), 120);
+  EXPECT_EQ(c.calibration.params_path, "calibration.params");
+  EXPECT_EQ(c.calibration.where, (dir_ / "swiveld.yaml").string() + ":16:3: calibration.plugin:");
+  EXPECT_FALSE(load(replaced(kValid, "command:\n", "calibration:\ncommand:\n")).has_calibration());
+
+  EXPECT_EQ(error_of(replaced(with, "  plugin: swpc_geometric\n", "  plugn: swpc_geometric\n")),
+            "swiveld.yaml:16:3: calibration: missing required key 'plugin' (expected a string); "
+            "is 'plugn' on line 16 a misspelling?");
+  EXPECT_EQ(error_of(replaced(with, "  params: {rotation_deg: 120}\n",
+                              "  params: {rotation_deg: 120}\n  when: now\n")),
+            "swiveld.yaml:18:3: calibration.when: unknown key (known: plugin, params)");
+  EXPECT_EQ(error_of(replaced(with, "plugin: swpc_geometric", "plugin: Swpc")),
+            "swiveld.yaml:16:3: calibration.plugin: expected a plugin name (lower case, digits, "
+            "'_'), got 'Swpc'");
+}
+
+TEST_F(DaemonConfigTest, RepositorySwpc4ConfigRunsTheGeometricCalibration) {
+  const DaemonConfig c =
+      load_daemon_config(std::string(SWIVEL_SOURCE_DIR) + "/config/swiveld_swpc4.yaml");
+  EXPECT_EQ(c.robot.name, "swpc4");
+  ASSERT_TRUE(c.has_calibration());
+  EXPECT_EQ(c.calibration.plugin, "swpc_geometric");
+  EXPECT_EQ(c.calibration.params["rotation_deg"].as<double>(), 90.0);
 }
 
 TEST_F(DaemonConfigTest, RepositoryDefaultConfigIsValid) {
@@ -145,7 +177,7 @@ TEST_F(DaemonConfigTest, UnknownKeyListsKnownKeys) {
             "realtime)");
   EXPECT_EQ(error_of(replaced(kValid, "status:", "stats:")),
             "swiveld.yaml:23:1: stats: unknown key (known: loop, robot_model, hardware, "
-            "drivetrain, localization, command, plugin_path, logging, status, dds)");
+            "drivetrain, localization, calibration, command, plugin_path, logging, status, dds)");
 }
 
 TEST_F(DaemonConfigTest, WrongTypeShowsValue) {

@@ -110,6 +110,11 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
   c.hardware = read_plugin(top, "hardware");
   c.drivetrain = read_plugin(top, "drivetrain");
   c.localization = read_plugin(top, "localization");
+  // Optional: without it (or with `calibration:` left empty) calibrate requests are refused.
+  if (const YAML::Node section = top.child("calibration").node();
+      section.IsDefined() && !section.IsNull()) {
+    c.calibration = read_plugin(top, "calibration");
+  }
 
   ParamReader command = top.child("command");
   c.command.timeout_s = command.number_or("timeout_s", c.command.timeout_s, 0.001, 60.0);

@@ -48,6 +48,9 @@ struct DaemonConfig {
   PluginConfig hardware;
   PluginConfig drivetrain;
   PluginConfig localization;
+  /// `calibration:` (optional): the calibration plugin `swivelctl calibrate` runs; its
+  /// `plugin` is empty when the section is absent (calibrate requests are then refused).
+  PluginConfig calibration;
 
   CommandConfig command;
   std::vector<std::string> plugin_path;  ///< searched before the default search path
@@ -56,6 +59,7 @@ struct DaemonConfig {
   YAML::Node dds;  ///< the `dds:` mapping, validated by the DDS bridge (null when absent)
 
   [[nodiscard]] double period_s() const { return 1.0 / rate_hz; }
+  [[nodiscard]] bool has_calibration() const { return !calibration.plugin.empty(); }
 };
 
 /// Reads, validates and resolves a configuration file (the robot model included).
