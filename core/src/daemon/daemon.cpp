@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "calibration_runner.hpp"
 #include "config_watcher.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/dds/bridge.hpp"
@@ -103,6 +104,21 @@ std::string join(const std::vector<std::string>& items) {
   return text;
 }
 
+PluginContext calibration_context(const DaemonConfig& config) {
+  PluginContext ctx;
+  ctx.params = config.calibration.params;
+  ctx.config_file = config.file;
+  ctx.params_path = config.calibration.params_path;
+  ctx.config_dir = config.config_dir;
+  ctx.robot = &config.robot;
+  ctx.period_s = config.period_s();
+  return ctx;
+}
+
+const char* drivetrain_name(DrivetrainKind kind) {
+  return kind == DrivetrainKind::kSwpc ? "swpc" : "differential";
+}
+
 timespec to_timespec(double seconds) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(seconds);
@@ -144,6 +160,12 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
                       std::to_string(config_.robot.module_count()));
   }
   localization_->reset(PoseEstimate{});
+  if (config_.has_calibration()) {
+    // Configured once here so that a mistake in its params (or a robot it cannot calibrate)
+    // stops the start-up like any other plugin's; each start creates a fresh instance.
+    PluginInstance<Calibration> check = create_plugin<Calibration>(loader_, config_.calibration);
+    configure_plugin(*check, config_.calibration, config_);
+  }
   if (!(options_.record_rate_hz > 0.0 && options_.record_rate_hz <= 10000.0)) {
     throw ConfigError("--record-rate-hz: expected a rate in (0, 10000] Hz");
   }
@@ -176,6 +198,26 @@ void Daemon::start() {
   spdlog::info("loop running at {} Hz: hardware {}, drivetrain {}, localization {}, robot {}",
                config_.rate_hz, config_.hardware.plugin, config_.drivetrain.plugin,
                config_.localization.plugin, config_.robot.name);
+  if (config_.has_calibration()) {
+    // The runner calls back with its mutex held, from the thread that called it (the DDS
+    // subscriber or the main thread), never from the loop.
+    calibration_ = std::make_unique<CalibrationRunner>(
+        *loop_, loader_, config_.robot, config_.robot_model_path, calibration_context(config_),
+        config_.calibration.plugin, [this](const dds::CalibrationSample& sample) {
+          if (sample.status != calibration_logged_ || sample.status != "running") {
+            if (sample.status == "failed") {
+              spdlog::error("calibration failed: {}", sample.text);
+            } else {
+              spdlog::info("calibration {}: {}", sample.status, sample.text);
+            }
+            calibration_logged_ = sample.status;
+          }
+          publish_calibration(sample);
+        });
+    spdlog::info("calibration: plugin {} ready (swivelctl calibrate start); calibrated models "
+                 "are written next to {}",
+                 config_.calibration.plugin, config_.robot_model_path);
+  }
   if (config_.command.source == CommandSource::kScript) {
     command_thread_ = std::jthread([this](const std::stop_token& stop) { run_script(stop); });
     spdlog::info("command source: script of {} steps, played in a loop",
@@ -221,6 +263,8 @@ void Daemon::start_bridge() {
   callbacks.on_request = [this](const dds::RequestSample& request) {
     if (request.verb == "reload") {
       request_reload();
+    } else if (request.verb == "calibrate") {
+      handle_calibrate_request(request.argument);
     } else {
       spdlog::warn("DDS request '{}' is not supported; ignored", request.verb);
     }
@@ -234,6 +278,52 @@ void Daemon::start_bridge() {
                dds_options_.publish_rate_hz,
                dds_options_.ros2.enabled ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic()
                                          : std::string());
+}
+
+std::string Daemon::calibration_refusal() const {
+  if (config_.robot.drivetrain != DrivetrainKind::kSwpc) {
+    return std::string("refused: robot '") + config_.robot.name + "' has a " +
+           drivetrain_name(config_.robot.drivetrain) +
+           " drivetrain; the calibration (swpc_geometric) needs an swpc robot, and " +
+           config_.file + " has no calibration: section";
+  }
+  return "refused: no calibration configured: add 'calibration: {plugin: swpc_geometric}' to " +
+         config_.file + " and restart swiveld";
+}
+
+void Daemon::handle_calibrate_request(const std::string& argument) {
+  spdlog::info("calibrate {} requested", argument.empty() ? "status" : argument);
+  if (calibration_) {
+    try {
+      calibration_->handle_request(argument);
+    } catch (const std::exception& e) {
+      spdlog::error("calibrate {}: {}", argument, e.what());
+    }
+    return;
+  }
+  dds::CalibrationSample answer;
+  answer.status = "failed";
+  answer.text = calibration_refusal();
+  spdlog::warn("calibrate: {}", answer.text);
+  publish_calibration(answer);
+}
+
+void Daemon::publish_calibration(const dds::CalibrationSample& sample) noexcept {
+  if (!bridge_) return;
+  try {
+    bridge_->publish_calibration(sample);
+  } catch (const std::exception& e) {
+    spdlog::error("calibration result not published: {}", e.what());
+  }
+}
+
+void Daemon::poll_calibration() noexcept {
+  if (!calibration_) return;
+  try {
+    calibration_->poll();
+  } catch (const std::exception& e) {
+    spdlog::error("calibration: {}", e.what());
+  }
 }
 
 dds::DiagnosticsSample Daemon::read_diagnostics() {
@@ -278,10 +368,12 @@ void Daemon::stop() noexcept {
     }
   }
   watcher_.reset();
-  if (bridge_) {
-    bridge_->stop();
-    bridge_.reset();
-  }
+  // The subscriber thread may call the runner, and the runner publishes through the bridge:
+  // stop the bridge's threads first, cancel a running calibration while the loop still
+  // runs (the runner waits for the loop to hand it back), then delete the bridge.
+  if (bridge_) bridge_->stop();
+  calibration_.reset();
+  bridge_.reset();
   if (command_thread_.joinable()) {
     command_thread_.request_stop();
     command_thread_.join();
@@ -412,6 +504,7 @@ ReloadResult Daemon::reload(const std::string& trigger) {
     }
     if (fresh.plugin_path != config_.plugin_path) restart.push_back("plugin_path");
     if (dump(fresh.dds) != dump(config_.dds)) restart.push_back("dds");
+    if (!same_slot(fresh.calibration, config_.calibration)) restart.push_back("calibration");
 
     std::vector<std::string> applied;
     const bool swap = !same_slot(fresh.localization, config_.localization);
@@ -523,6 +616,7 @@ int Daemon::run_until_signal(const sigset_t& signals) {
       reload("configuration file changed or reload requested");
     }
     collect_retired_localization();
+    poll_calibration();
     double wait_s = std::min(kTickS, next_status_s - monotonic_now_s());
     if (watchdog_interval_) wait_s = std::min(wait_s, next_watchdog_s - monotonic_now_s());
     const timespec timeout = to_timespec(std::max(0.0, wait_s));

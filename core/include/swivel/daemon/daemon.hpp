@@ -4,10 +4,18 @@
 // SIGHUP, DDS `reload` request), the run-log recorder and the status output. main() only
 // parses the command line and blocks the signals.
 //
-// Threads: the main thread (run_until_signal) owns reloads, hot swaps and the watchdog;
-// the loop thread runs the plugins; the bridge has a publisher and a subscriber thread; the
-// script command source, the recorder and the file watcher have one thread each. Nothing
-// added here runs on the loop thread.
+// Threads: the main thread (run_until_signal) owns reloads, hot swaps, the watchdog and
+// the calibration's periodic work; the loop thread runs the plugins; the bridge has a
+// publisher and a subscriber thread (which starts and cancels calibrations); the script
+// command source, the recorder and the file watcher have one thread each. Nothing added
+// here runs on the loop thread.
+//
+// Calibration (`calibration:` in swiveld.yaml): a DDS Request with verb "calibrate" and
+// argument start | cancel | status reaches the CalibrationRunner, which hands the plugin to
+// the loop (mode kCalibration: velocity commands and the script are ignored meanwhile),
+// analyses the recording off the loop and writes the calibrated model next to the nominal
+// one. Progress and results go out as CalibrationResult samples; without a calibration
+// section every calibrate request is answered with status "failed" and the reason.
 
 #include <signal.h>
 
@@ -32,11 +40,13 @@ class ControlLoop;
 }
 namespace swivel::dds {
 class DdsBridge;
+struct CalibrationSample;
 struct DiagnosticsSample;
 }
 
 namespace swivel::daemon {
 
+class CalibrationRunner;
 class ConfigWatcher;
 
 /// Monotonic time in seconds (CLOCK_MONOTONIC, the loop's clock).
@@ -59,8 +69,9 @@ struct ReloadResult {
 
 class Daemon {
  public:
-  /// Loads every plugin and configures it, resets the localization at the origin and
-  /// validates the `dds:` section. Nothing runs yet, so a failure here leaves no thread.
+  /// Loads every plugin and configures it (the calibration plugin once, to validate its
+  /// params), resets the localization at the origin and validates the `dds:` section.
+  /// Nothing runs yet, so a failure here leaves no thread.
   /// @throws ConfigError (a plugin's params, dds) or PluginError (loading), both naming the
   ///         configuration file, line and key.
   explicit Daemon(DaemonConfig config, DaemonOptions options = {});
@@ -68,13 +79,15 @@ class Daemon {
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  /// Starts the recorder's file, the real-time loop, the command source, the DDS bridge and
-  /// the configuration watcher, then notifies READY=1. Logs each real-time warning once.
+  /// Starts the recorder's file, the real-time loop, the calibration runner (when
+  /// configured), the command source, the DDS bridge and the configuration watcher, then
+  /// notifies READY=1. Logs each real-time warning once.
   /// @throws RunLogError when the run log cannot be created; DdsError when DDS refuses.
   void start();
 
-  /// Notifies STOPPING=1, stops the watcher, the bridge, the command source and the
-  /// recorder, then the loop (which leaves the robot at zero velocity). Idempotent.
+  /// Notifies STOPPING=1, stops the watcher, the bridge, a running calibration, the command
+  /// source and the recorder, then the loop (which leaves the robot at zero velocity).
+  /// Idempotent.
   void stop() noexcept;
 
   /// Prints a status line every status period, sends the watchdog while the loop advances
@@ -84,8 +97,8 @@ class Daemon {
   int run_until_signal(const sigset_t& signals);
 
   /// Re-reads and validates the configuration file and applies what can change live (the
-  /// localization by hot swap, logging level, status period). Main thread only, while the
-  /// loop runs. `trigger` names the cause in the log.
+  /// localization by hot swap, logging level, status period; a changed `calibration:` needs
+  /// a restart). Main thread only, while the loop runs. `trigger` names the cause in the log.
   ReloadResult reload(const std::string& trigger);
 
   /// Asks the main thread to reload soon (any thread).
@@ -99,6 +112,10 @@ class Daemon {
   /// The loop, once started (null before start() and after stop()).
   [[nodiscard]] rt::ControlLoop* loop() { return loop_.get(); }
 
+  /// Handles the argument of a "calibrate" request (start | cancel | status) and publishes
+  /// the answer as a CalibrationResult. Any non-real-time thread; not the loop thread.
+  void handle_calibrate_request(const std::string& argument);
+
  private:
   void run_script(const std::stop_token& stop);
   void run_recorder(const std::stop_token& stop);
@@ -106,6 +123,9 @@ class Daemon {
   dds::DiagnosticsSample read_diagnostics();
   void collect_retired_localization() noexcept;
   void send_watchdog_if_healthy();
+  void poll_calibration() noexcept;
+  void publish_calibration(const dds::CalibrationSample& sample) noexcept;
+  [[nodiscard]] std::string calibration_refusal() const;
 
   DaemonConfig config_;  // the configuration in effect (main thread writes, on reload)
   DaemonOptions options_;
@@ -118,6 +138,8 @@ class Daemon {
   PluginInstance<Localization> retiring_;      // swapped out; destroyed once the loop let go
   std::unique_ptr<rt::ControlLoop> loop_;
   std::unique_ptr<dds::DdsBridge> bridge_;
+  std::unique_ptr<CalibrationRunner> calibration_;  // null without `calibration:`
+  std::string calibration_logged_;  // last status logged (under the runner's mutex)
   std::unique_ptr<ConfigWatcher> watcher_;
   std::jthread command_thread_;
   std::jthread recorder_thread_;

@@ -54,7 +54,7 @@ struct DiagnosticsSample {
 
 /// A request addressed to this robot (Request topic).
 struct RequestSample {
-  std::string verb;      ///< "reload", later "calibrate"
+  std::string verb;      ///< "reload" or "calibrate"
   std::string argument;  ///< verb-specific, "" when none
   std::uint64_t sequence_number = 0;
 };
