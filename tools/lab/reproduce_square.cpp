@@ -1,7 +1,8 @@
 // swivel-lab reproduce square: the tracking test of PAPERS.md §1 (Table 5, Fig. 13). The
 // simulated robot's true parameters are the paper's calibrated values (Table 4); it follows
 // a 2.5 m square on its own odometry, once with the design values and once with the values
-// our calibration recovers from a simulated calibration of that robot.
+// our calibration recovers from a simulated calibration of that robot, or the values of a
+// calibrated model file given with --calibrated-model (e.g. the one swiveld wrote).
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 #include "swivel/calibration/calibration_io.hpp"
 #include "swivel/calibration/monte_carlo.hpp"
 #include "swivel/calibration/simulated_procedure.hpp"
+#include "swivel/robot_model_io.hpp"
 
 namespace swivel::lab {
 namespace {
@@ -40,6 +42,7 @@ struct SquareOptions {
   bool short_mode = false;
   double slip_std = 0.01;
   double scrub_std = 0.005;
+  std::string calibrated_model;  // "" = calibrate the simulated robot here
 };
 
 RobotModel design_model() {
@@ -124,21 +127,39 @@ int run_square_reproduction(const SquareOptions& o) {
   const RobotModel nominal = design_model();
   const RobotModel truth = table4_model();
 
-  // Our calibration of the true robot, from a simulated calibration with default noise.
-  calibration::SimulatedProcedureOptions cal_options;
-  cal_options.sim.seed = o.seed;
-  const calibration::SimulatedCalibration sc =
-      calibration::run_simulated_calibration(nominal, truth, cal_options);
-  if (!sc.result.ok()) {
-    std::fprintf(stderr, "reproduce square: the simulated calibration was refused: %s\n",
-                 sc.result.reason().c_str());
-    return 2;
+  // Our calibration of the true robot, from a simulated calibration with default noise, or
+  // a calibrated model from a file.
+  RobotModel calibrated;
+  std::size_t passes = 0;
+  if (o.calibrated_model.empty()) {
+    calibration::SimulatedProcedureOptions cal_options;
+    cal_options.sim.seed = o.seed;
+    const calibration::SimulatedCalibration sc =
+        calibration::run_simulated_calibration(nominal, truth, cal_options);
+    if (!sc.result.ok()) {
+      std::fprintf(stderr, "reproduce square: the simulated calibration was refused: %s\n",
+                   sc.result.reason().c_str());
+      return 2;
+    }
+    calibrated = calibration::calibrated_model(nominal, sc.result);
+    passes = sc.passes();
+  } else {
+    calibrated = load_robot_model(o.calibrated_model);
+    if (calibrated.drivetrain != DrivetrainKind::kSwpc ||
+        calibrated.modules.size() != truth.modules.size()) {
+      std::fprintf(stderr, "reproduce square: %s: expected an swpc model with %zu modules\n",
+                   o.calibrated_model.c_str(), truth.modules.size());
+      return 2;
+    }
   }
-  const RobotModel calibrated = calibration::calibrated_model(nominal, sc.result);
   std::printf("Table 5 reproduction: square tracking on odometry, nominal vs calibrated\n");
   std::printf("true robot: the paper's calibrated values (Table 4); nominal: design values\n");
-  std::printf("calibrated: recovered by a simulated calibration (%zu passes, default noise)\n",
-              sc.passes());
+  if (o.calibrated_model.empty()) {
+    std::printf("calibrated: recovered by a simulated calibration (%zu passes, default noise)\n",
+                passes);
+  } else {
+    std::printf("calibrated: %s\n", o.calibrated_model.c_str());
+  }
   std::printf("  %-6s %-12s %-12s %-12s %-12s  (recovered - true)\n", "module", "pos [mm]",
               "delta [deg]", "d [mm]", "r [mm]");
   for (std::size_t i = 0; i < truth.modules.size(); ++i) {
@@ -213,7 +234,8 @@ int run_square_reproduction(const SquareOptions& o) {
   j["settings"] = {{"side_m", 2.5},       {"laps", laps},         {"runs_per_direction", runs},
                    {"speed_mps", 0.2},    {"seed", o.seed},       {"wheel_slip_std", o.slip_std},
                    {"lateral_scrub_std", o.scrub_std}, {"short", o.short_mode}};
-  j["calibration_passes"] = sc.passes();
+  j["calibration_passes"] = passes;
+  if (!o.calibrated_model.empty()) j["calibrated_model"] = o.calibrated_model;
   j["measured"] = {{"position_mae_m", {{"nominal", pos_nom}, {"calibrated", pos_cal}}},
                    {"heading_mae_deg", {{"nominal", head_nom}, {"calibrated", head_cal}}},
                    {"position_change_percent", pos_red},
@@ -258,6 +280,10 @@ void add_reproduce_square_command(CLI::App& reproduce, int& exit_code) {
       ->check(CLI::Range(0.0, 0.2))
       ->capture_default_str();
   cmd->add_flag("--short", options->short_mode, "1 run per direction, 1 lap (for the test suite)");
+  cmd->add_option("--calibrated-model", options->calibrated_model,
+                  "track with this calibrated model (e.g. written by swiveld) instead of "
+                  "calibrating the simulated robot here")
+      ->check(CLI::ExistingFile);
   cmd->callback([options, &exit_code]() { exit_code = run_square_reproduction(*options); });
 }
 
