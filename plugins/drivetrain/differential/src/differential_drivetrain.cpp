@@ -1,6 +1,7 @@
 #include "differential_drivetrain.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "swivel/config/config_error.hpp"
@@ -19,6 +20,8 @@ void DifferentialDrivetrain::configure(const PluginContext& ctx) {
   ParamReader params(ctx.params, ctx.config_file, ctx.params_path);
   const double max_rate_radps =
       params.number_or("max_wheel_rate_radps", kDefaultMaxWheelRateRadps, 1e-3, 1e5);
+  const double plausible_factor =
+      params.number_or("plausible_rate_factor", kDefaultPlausibleRateFactor, 1.0, 1e3);
   params.finish();
 
   if (ctx.robot == nullptr) throw ConfigError("differential drivetrain: no robot model");
@@ -26,15 +29,19 @@ void DifferentialDrivetrain::configure(const PluginContext& ctx) {
     throw ConfigError(ctx.robot->source_file +
                       ": drivetrain: expected 'differential' for the differential plugin");
   }
+  const int counts = ctx.robot->sensors.wheel_encoder_counts_per_rev;
+  const double margin_rad =
+      counts > 0 ? 4.0 * 2.0 * std::numbers::pi / counts : kDefaultPlausibilityMarginRad;
   try {
-    configure(ctx.robot->differential, max_rate_radps);
+    configure(ctx.robot->differential, max_rate_radps, plausible_factor, margin_rad);
   } catch (const ConfigError& e) {
     throw ConfigError(ctx.robot->source_file + ": " + e.what());
   }
 }
 
 void DifferentialDrivetrain::configure(const DifferentialParams& geometry,
-                                       double max_wheel_rate_radps) {
+                                       double max_wheel_rate_radps, double plausible_rate_factor,
+                                       double plausibility_margin_rad) {
   if (!positive_finite(geometry.wheel_radius_left_m)) {
     throw ConfigError("differential.wheel_radius_left_m: expected a positive number");
   }
@@ -47,8 +54,16 @@ void DifferentialDrivetrain::configure(const DifferentialParams& geometry,
   if (!positive_finite(max_wheel_rate_radps)) {
     throw ConfigError("max_wheel_rate_radps: expected a positive number");
   }
+  if (!std::isfinite(plausible_rate_factor) || !(plausible_rate_factor >= 1.0)) {
+    throw ConfigError("plausible_rate_factor: expected a number >= 1");
+  }
+  if (!std::isfinite(plausibility_margin_rad) || !(plausibility_margin_rad >= 0.0)) {
+    throw ConfigError("plausibility margin: expected a finite angle >= 0 rad");
+  }
   geometry_ = geometry;
   max_wheel_rate_radps_ = max_wheel_rate_radps;
+  plausible_rate_factor_ = plausible_rate_factor;
+  plausibility_margin_rad_ = plausibility_margin_rad;
   states_ = {};
   configured_ = true;
 }
@@ -69,6 +84,17 @@ Status DifferentialDrivetrain::forward(const HardwareState& previous,
   if (!std::isfinite(dpsi_left_rad) || !std::isfinite(dpsi_right_rad)) {
     return fail("differential: non-finite wheel angle");
   }
+  // An encoder jump (lost counts, a glitch) must not reach the odometry. The measured rates
+  // stay in the module states so that the snapshot shows what was rejected.
+  states_[0].wheel_rate_meas_radps = dpsi_left_rad / dt_s;
+  states_[1].wheel_rate_meas_radps = dpsi_right_rad / dt_s;
+  const double plausible_rad = plausible_wheel_rate_radps() * dt_s + plausibility_margin_rad_;
+  if (std::abs(dpsi_left_rad) > plausible_rad) {
+    return fail("differential: left wheel rate implausible (encoder jump)");
+  }
+  if (std::abs(dpsi_right_rad) > plausible_rad) {
+    return fail("differential: right wheel rate implausible (encoder jump)");
+  }
 
   const Pose2 delta = differential::forward_increment(geometry_, dpsi_left_rad, dpsi_right_rad);
   // The constant twist that moves the robot along exactly this arc in dt: forward speed is
@@ -81,8 +107,6 @@ Status DifferentialDrivetrain::forward(const HardwareState& previous,
   out.twist = Twist2{arc_m / dt_s, 0.0, delta.yaw_rad / dt_s};
   out.residual = 0.0;  // two wheels, two unknowns: no redundancy to measure slip with
   out.valid = true;
-  states_[0].wheel_rate_meas_radps = dpsi_left_rad / dt_s;
-  states_[1].wheel_rate_meas_radps = dpsi_right_rad / dt_s;
   return Status::kOk;
 }
 

@@ -49,6 +49,24 @@ TEST(DifferentialDrivetrain, ForwardGivesArcAndMeanTwist) {
   EXPECT_NEAR(states[1].wheel_rate_meas_radps, 0.4 / 0.075, 1e-9);
 }
 
+TEST(DifferentialDrivetrain, ImplausibleIncrementIsRejectedNamingTheWheel) {
+  // Limit 20 rad/s, factor 3, margin 0.01 rad: over 10 ms a wheel may turn 0.61 rad.
+  DifferentialDrivetrain dt;
+  dt.configure(kDocent, 20.0, 3.0, 0.01);
+  EXPECT_DOUBLE_EQ(dt.plausible_wheel_rate_radps(), 60.0);
+  OdometryIncrement odo;
+  EXPECT_EQ(dt.forward(reading(1.0, 0.0, 0.0), reading(1.01, 0.6, -0.6), odo), Status::kOk);
+  EXPECT_EQ(dt.forward(reading(1.0, 0.0, 0.0), reading(1.01, 0.0, -0.62), odo), Status::kError);
+  EXPECT_STREQ(dt.last_error(), "differential: right wheel rate implausible (encoder jump)");
+  EXPECT_FALSE(odo.valid);
+  EXPECT_EQ(dt.forward(reading(1.0, 0.0, 0.0), reading(1.01, 50.0, 0.0), odo), Status::kError);
+  EXPECT_STREQ(dt.last_error(), "differential: left wheel rate implausible (encoder jump)");
+  std::array<ModuleState, 2> states{};
+  dt.module_states(states);
+  EXPECT_NEAR(states[0].wheel_rate_meas_radps, 5000.0, 1e-9);
+  EXPECT_THROW(dt.configure(kDocent, 20.0, 0.5, 0.01), ConfigError);
+}
+
 TEST(DifferentialDrivetrain, InverseScalesTwistToKeepCurvature) {
   DifferentialDrivetrain dt;
   dt.configure(kDocent, 20.0);

@@ -1,8 +1,11 @@
 #include "swpc_drivetrain.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <string_view>
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
@@ -15,6 +18,23 @@ namespace {
 bool finite(double v) noexcept {
   return std::isfinite(v);
 }
+
+// "swpc: module <i> <what>" for every module index, built at compile time so that forward()
+// can name the module with a static text.
+using ModuleText = std::array<char, 64>;
+constexpr std::array<ModuleText, kMaxModules> module_texts(std::string_view what) {
+  std::array<ModuleText, kMaxModules> out{};
+  for (std::size_t m = 0; m < kMaxModules; ++m) {
+    std::size_t n = 0;
+    for (const char c : std::string_view("swpc: module ")) out[m][n++] = c;
+    if (m >= 10) out[m][n++] = static_cast<char>('0' + m / 10);
+    out[m][n++] = static_cast<char>('0' + m % 10);
+    for (const char c : what) out[m][n++] = c;
+  }
+  return out;
+}
+constexpr auto kWheelImplausible = module_texts(" wheel rate implausible (encoder jump)");
+constexpr auto kSteerImplausible = module_texts(" steering rate implausible (encoder jump)");
 
 // Measured angles may be wrapped by the encoder; a step never turns more than half a turn.
 double wrap_pi(double angle_rad) noexcept {
@@ -46,6 +66,8 @@ void SwpcDrivetrain::configure(const PluginContext& ctx) {
   limits.max_steer_rate_radps =
       params.number_or("max_steer_rate_radps", limits.max_steer_rate_radps, 1e-3, 1e5);
   limits.min_speed_mps = params.number_or("min_speed_mps", limits.min_speed_mps, 0.0, 1.0);
+  limits.plausible_rate_factor =
+      params.number_or("plausible_rate_factor", limits.plausible_rate_factor, 1.0, 1e3);
   params.finish();
 
   if (ctx.robot == nullptr) {
@@ -54,6 +76,9 @@ void SwpcDrivetrain::configure(const PluginContext& ctx) {
   if (ctx.robot->drivetrain != DrivetrainKind::kSwpc) {
     throw ConfigError(ctx.robot->source_file + ": drivetrain: expected 'swpc' for the swpc plugin");
   }
+  const int counts = std::min(ctx.robot->sensors.wheel_encoder_counts_per_rev,
+                              ctx.robot->sensors.steering_encoder_counts_per_rev);
+  if (counts > 0) limits.plausibility_margin_rad = 4.0 * 2.0 * std::numbers::pi / counts;
   try {
     configure(ctx.robot->modules, limits);
   } catch (const ConfigError& e) {
@@ -85,6 +110,11 @@ void SwpcDrivetrain::configure(std::span<const SwpcModuleParams> modules,
       !(limits.min_speed_mps >= 0.0) || !finite(limits.max_wheel_rate_radps) ||
       !finite(limits.max_steer_rate_radps) || !finite(limits.min_speed_mps)) {
     throw ConfigError("swpc limits: expected positive rate limits and min_speed_mps >= 0");
+  }
+  if (!finite(limits.plausible_rate_factor) || !(limits.plausible_rate_factor >= 1.0) ||
+      !finite(limits.plausibility_margin_rad) || !(limits.plausibility_margin_rad >= 0.0)) {
+    throw ConfigError(
+        "swpc limits: expected plausible_rate_factor >= 1 and plausibility_margin_rad >= 0");
   }
   count_ = static_cast<std::uint32_t>(modules.size());
   for (std::size_t i = 0; i < modules.size(); ++i) {
@@ -120,10 +150,21 @@ Status SwpcDrivetrain::forward(const HardwareState& previous, const HardwareStat
       return fail("swpc: non-finite steering or wheel angle");
     }
     const double dphi = wrap_pi(current.steer_angle_rad[i] - previous.steer_angle_rad[i]);
+    const double dpsi = current.wheel_angle_rad[i] - previous.wheel_angle_rad[i];
+    states_[i].wheel_rate_meas_radps = dpsi / dt_s;
+    // An encoder jump (lost counts, a glitch) must not reach the odometry.
+    if (std::abs(dpsi) > limits_.plausible_rate_factor * limits_.max_wheel_rate_radps * dt_s +
+                             limits_.plausibility_margin_rad) {
+      return fail(kWheelImplausible[i].data());
+    }
+    if (std::abs(dphi) > limits_.plausible_rate_factor * limits_.max_steer_rate_radps * dt_s +
+                             limits_.plausibility_margin_rad) {
+      return fail(kSteerImplausible[i].data());
+    }
     // The rates are means over the step; the mid-step angle makes the fit second-order.
     phi[i] = previous.steer_angle_rad[i] + 0.5 * dphi + modules_[i].steering_offset_rad;
     steer_rate[i] = dphi / dt_s;
-    wheel_rate[i] = (current.wheel_angle_rad[i] - previous.wheel_angle_rad[i]) / dt_s;
+    wheel_rate[i] = dpsi / dt_s;
   }
 
   const std::span<const double> phi_span(phi.data(), count_);

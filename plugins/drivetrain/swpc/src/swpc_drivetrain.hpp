@@ -20,12 +20,18 @@ struct SwpcDrivetrainLimits {
   /// Below this fastest steering-axis speed a command is treated as "near zero": it is
   /// faded out, reaching exactly zero (casters hold their angle) at half of it. 0 disables.
   double min_speed_mps = 0.005;
+  /// A reading whose increment implies a wheel or steering rate above this factor times its
+  /// limit (plus plausibility_margin_rad) is rejected as an encoder jump.
+  double plausible_rate_factor = 3.0;
+  /// Angle allowance of that check (quantization over a short step), rad.
+  double plausibility_margin_rad = 0.01;
 };
 
 class SwpcDrivetrain final : public Drivetrain {
  public:
   /// Off the loop. Geometry from ctx.robot->modules (2..kMaxModules, d > 0, r > 0); params
-  /// max_wheel_rate_radps, max_steer_rate_radps, min_speed_mps (all optional).
+  /// max_wheel_rate_radps, max_steer_rate_radps, min_speed_mps, plausible_rate_factor (all
+  /// optional); the plausibility margin is 4 counts of the coarser encoder of the model.
   /// @throws ConfigError naming the key.
   void configure(const PluginContext& ctx) override;
 
@@ -36,6 +42,8 @@ class SwpcDrivetrain final : public Drivetrain {
 
   /// Real-time safe. Rates from angle increments over dt, true steering at mid-step,
   /// least-squares twist integrated exactly over dt; residual (m/s) into out.residual.
+  /// kError ("swpc: module I wheel|steering rate implausible ...") for an increment beyond
+  /// plausible_rate_factor x its limit; the module state keeps the measured wheel rate.
   Status forward(const HardwareState& previous, const HardwareState& current,
                  OdometryIncrement& out) noexcept override;
 

@@ -411,6 +411,33 @@ TEST(SwpcDrivetrain, NonFiniteInputsFailWithAStaticMessageAndZeroRates) {
                "swpc: module count of the hardware state does not match the robot model");
 }
 
+TEST(SwpcDrivetrain, ImplausibleIncrementsAreRejectedNamingTheModule) {
+  // Limits 40 rad/s (wheel) and 12 rad/s (steering), factor 3, margin 0.01 rad: over 1 ms
+  // a wheel may turn 0.13 rad and a caster 0.046 rad.
+  SwpcDrivetrain drivetrain = configured(design_modules());
+  const HardwareState previous = state_at({0.1, 0.2, 0.3, 0.4});
+  HardwareState current = previous;
+  current.stamp_s = kDt;
+  OdometryIncrement inc;
+  current.wheel_angle_rad[2] = 0.12;
+  current.steer_angle_rad[1] = 0.2 + 0.04;
+  EXPECT_EQ(drivetrain.forward(previous, current, inc), Status::kOk);
+
+  current.wheel_angle_rad[2] = 0.14;
+  EXPECT_EQ(drivetrain.forward(previous, current, inc), Status::kError);
+  EXPECT_STREQ(drivetrain.last_error(), "swpc: module 2 wheel rate implausible (encoder jump)");
+  EXPECT_FALSE(inc.valid);
+  std::array<ModuleState, 4> states{};
+  drivetrain.module_states(states);
+  EXPECT_NEAR(states[2].wheel_rate_meas_radps, 140.0, 1e-9);
+
+  current.wheel_angle_rad[2] = 0.0;
+  current.steer_angle_rad[1] = 0.2 - 0.05;
+  EXPECT_EQ(drivetrain.forward(previous, current, inc), Status::kError);
+  EXPECT_STREQ(drivetrain.last_error(),
+               "swpc: module 1 steering rate implausible (encoder jump)");
+}
+
 TEST(SwpcDrivetrain, ModuleStatesReportCommandedAndMeasuredValues) {
   SwpcDrivetrain drivetrain = configured(offset_modules());
   const HardwareState state = state_at({0.5, -0.5, 1.5, -1.5});
