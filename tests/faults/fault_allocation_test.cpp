@@ -80,11 +80,16 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
       rig.loop->clear_fault();
       drive_with_fixes(rig, 100, false);
     }
-    (void)rig.inject("out_of_range_wheel", 0.001, 0, 5.0);
+    (void)rig.inject("out_of_range_wheel", 0.001, 0, 5.0);  // rejected by the drivetrain
     drive_with_fixes(rig, 100, false);
-    (void)rig.inject("frozen_encoder", 0.1, 1);
-    drive_with_fixes(rig, 200, false);
-    (void)rig.inject("gyro_dropout", 0.1);
+    rig.loop->clear_fault();
+    drive_with_fixes(rig, 100, false);
+    // Trips the odometry check; the encoder catching up at the end is an implausible jump.
+    (void)rig.inject("frozen_encoder", 0.4, 1);
+    drive_with_fixes(rig, 600, false);
+    rig.loop->clear_fault();
+    drive_with_fixes(rig, 100, false);
+    (void)rig.inject("gyro_dropout", 0.1);  // falls back: no fault
     drive_with_fixes(rig, 200, false);
     after_sensor_faults = rig.state();
 
@@ -115,18 +120,19 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
   EXPECT_EQ(counts.allocations, 0U) << "first allocation: " << counts.first_allocation_bytes
                                     << " bytes";
   EXPECT_EQ(counts.deallocations, 0U);
-  // The sequence went through its faults: five latched sensor/hardware faults, then a
-  // timeout, a rejected command and the failing localization.
-  EXPECT_EQ(after_sensor_faults.fault_count, 5U);
+  // The sequence went through its faults: five latched sensor/hardware faults, the encoder
+  // jump, the frozen encoder and its catch-up jump, then a timeout, a rejected command and
+  // the failing localization.
+  EXPECT_EQ(after_sensor_faults.fault_count, 8U);
   EXPECT_EQ(after_sensor_faults.mode, LoopMode::kVelocity);
   const StateSnapshot last = rig.state();
-  EXPECT_EQ(last.fault_count, 8U);
+  EXPECT_EQ(last.fault_count, 11U);
   EXPECT_EQ(last.mode, LoopMode::kVelocity);
   EXPECT_EQ(last.localization_swaps, 2U);
   EXPECT_STREQ(last.localization_plugin.data(), "raw_eg");
   EXPECT_EQ(retired[0], kalman);
   EXPECT_EQ(retired[1], failing.get());
-  EXPECT_EQ(last.cycle, 500U + 500 + 200 + 5 * 200 + 100 + 200 + 200 + 700 + 1 + 50 + 100 + 100 +
+  EXPECT_EQ(last.cycle, 500U + 500 + 200 + 5 * 200 + 200 + 700 + 200 + 700 + 1 + 50 + 100 + 100 +
                             1 + 200);
 }
 

@@ -52,6 +52,7 @@ struct RigOptions {
   /// stays nominal), e.g. {"gyro_bias", {{"bias_rad_s", 0.05}}}.
   std::map<std::string, EffectParams> world_effects;
   double command_timeout_s = 0.5;
+  rt::OdometryCheckOptions odometry_check;  ///< the loop's defaults unless a test says
 };
 
 inline PluginContext plugin_context(const std::string& params_yaml, const std::string& path,
@@ -85,6 +86,7 @@ class FaultRig {
     loop_options.realtime = false;
     loop_options.rate_hz = 1.0 / kDtS;
     loop_options.command_timeout_s = options.command_timeout_s;
+    loop_options.odometry_check = options.odometry_check;
     loop = std::make_unique<rt::ControlLoop>(loop_options, *hardware, *drivetrain, *localization,
                                              options.localization.c_str());
     void* library = dlopen(hardware.path().c_str(), RTLD_NOW | RTLD_NOLOAD);

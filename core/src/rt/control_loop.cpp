@@ -21,17 +21,19 @@ bool finite(const Pose2& p) noexcept {
   return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad);
 }
 
-bool finite(const HardwareState& s) noexcept {
-  if (!finite(s.stamp_s)) return false;
+// The first non-finite field of a reading, as a static cause text; nullptr when all finite.
+const char* non_finite_field(const HardwareState& s) noexcept {
+  if (!finite(s.stamp_s)) return "non-finite reading timestamp";
   for (std::uint32_t i = 0; i < s.module_count; ++i) {
-    if (!finite(s.wheel_angle_rad[i]) || !finite(s.steer_angle_rad[i])) return false;
+    if (!finite(s.wheel_angle_rad[i])) return "non-finite wheel angle";
+    if (!finite(s.steer_angle_rad[i])) return "non-finite steering angle";
   }
-  if (s.gyro_valid && !finite(s.gyro_wz_radps)) return false;
+  if (s.gyro_valid && !finite(s.gyro_wz_radps)) return "non-finite gyro rate";
   if (s.motion_capture.valid &&
       (!finite(s.motion_capture.stamp_s) || !finite(s.motion_capture.pose))) {
-    return false;
+    return "non-finite motion-capture sample in the reading";
   }
-  return true;
+  return nullptr;
 }
 
 bool finite(const ActuatorCommand& c) noexcept {
@@ -56,7 +58,8 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       drivetrain_(drivetrain),
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
       active_localization_(&localization),
-      timing_(1.0 / options.rate_hz) {
+      timing_(1.0 / options.rate_hz),
+      odometry_monitor_(options.odometry_check) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
     throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
                                 std::to_string(options.rate_hz));
@@ -64,6 +67,11 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   if (!std::isfinite(options.command_timeout_s) || options.command_timeout_s <= 0.0) {
     throw std::invalid_argument("command timeout_s must be finite and positive, got " +
                                 std::to_string(options.command_timeout_s));
+  }
+  if (!OdometryMonitor::valid(options.odometry_check)) {
+    throw std::invalid_argument(
+        "odometry_check: gyro_disagreement_radps, residual_limit_mps, filter_time_constant_s "
+        "and persistence_s must be finite and positive, gyro_disagreement_fraction >= 0");
   }
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
@@ -139,7 +147,8 @@ void ControlLoop::thread_main(std::promise<std::string>& scheduling_warning) noe
 }
 
 bool ControlLoop::push_command(const VelocityCommand& command) noexcept {
-  return commands_.try_push(command);
+  (void)commands_.publish(command);
+  return true;
 }
 
 bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample) noexcept {
@@ -202,19 +211,43 @@ void ControlLoop::log_event(LogLevel level, LogCode code, double now_s, const ch
   log_.push(record);
 }
 
-void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail) noexcept {
+void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail, double value,
+                              double limit) noexcept {
   cycle_fault_ = code;
   if (latched_fault_ == code) return;  // the same cause persisting is one event
   latched_fault_ = code;
+  copy_text(detail != nullptr ? detail : fault_code_name(code), latched_detail_);
   ++state_.fault_count;
   log_event(LogLevel::kError, LogCode::kFaultRaised, now_s, "safe stop", static_cast<double>(code),
-            static_cast<double>(state_.fault_count), 0.0, 0.0, detail);
+            static_cast<double>(state_.fault_count), value, limit, detail);
+}
+
+// A frozen or slipping encoder: the odometry keeps disagreeing with the gyro, or (redundant
+// drivetrains) with itself.
+void ControlLoop::check_odometry(const OdometryIncrement& odometry, double now_s) noexcept {
+  const bool gyro_valid = current_.gyro_valid;
+  switch (odometry_monitor_.update(odometry, gyro_valid, current_.gyro_wz_radps)) {
+    case OdometryMonitor::Verdict::kConsistent:
+      return;
+    case OdometryMonitor::Verdict::kGyroDisagrees:
+      raise_fault(FaultCode::kOdometryInconsistent, now_s,
+                  "encoder yaw rate disagrees with the gyro",
+                  odometry_monitor_.yaw_difference_radps(),
+                  odometry_monitor_.gyro_limit_radps());
+      return;
+    case OdometryMonitor::Verdict::kResidualHigh:
+      raise_fault(FaultCode::kOdometryInconsistent, now_s,
+                  "drivetrain odometry residual above its limit",
+                  odometry_monitor_.residual_mps(), odometry_monitor_.options().residual_limit_mps);
+      return;
+  }
 }
 
 void ControlLoop::raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept {
   // Every rejected command is its own event; a timeout is one event until a command arrives.
   if (transient_fault_ == code && code == FaultCode::kCommandTimeout) return;
   transient_fault_ = code;
+  copy_text(text, transient_detail_);
   ++state_.fault_count;
   log_event(LogLevel::kWarn, LogCode::kFaultRaised, now_s, text, static_cast<double>(code),
             static_cast<double>(state_.fault_count));
@@ -340,8 +373,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     raise_fault(FaultCode::kHardwareError, now_s, thrown != nullptr ? thrown : hardware_.last_error());
   } else if (current_.module_count > kMaxModules) {
     raise_fault(FaultCode::kHardwareError, now_s, "module count out of range");
-  } else if (!finite(current_)) {
-    raise_fault(FaultCode::kNonFiniteSensor, now_s, nullptr);
+  } else if (const char* field = non_finite_field(current_); field != nullptr) {
+    raise_fault(FaultCode::kNonFiniteSensor, now_s, field);
   } else {
     reading_ok = true;
   }
@@ -376,6 +409,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     } else if (!finite(localization.estimate().pose)) {
       raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose estimate");
     }
+    if (odometry.valid) check_odometry(odometry, now_s);
   }
 
   // Leaving safe stop: only on request and only in a cycle without a fault.
@@ -385,6 +419,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
         log_event(LogLevel::kInfo, LogCode::kFaultCleared, now_s, "",
                   static_cast<double>(latched_fault_));
         latched_fault_ = FaultCode::kNone;
+        latched_detail_[0] = '\0';
         has_command_ = false;  // only a command that arrives from now on moves the robot
       } else {
         clear_requested_.store(true, std::memory_order_release);
@@ -392,9 +427,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     }
   }
 
-  // Newest velocity command.
+  // Newest velocity command (one per cycle at most: the slot keeps only the newest).
   VelocityCommand incoming;
-  while (commands_.try_pop(incoming)) {
+  if (commands_.take(incoming)) {
     if (finite(incoming.twist) && finite(incoming.received_s)) {
       command_ = incoming;
       has_command_ = true;
@@ -466,11 +501,17 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   if (latched_fault_ != FaultCode::kNone) {
     state_.mode = LoopMode::kSafeStop;
     state_.fault = latched_fault_;
+    state_.fault_detail = latched_detail_;
   } else {
     state_.mode = calibrating ? LoopMode::kCalibration
                   : moving    ? LoopMode::kVelocity
                               : LoopMode::kIdle;
     state_.fault = transient_fault_;
+    if (transient_fault_ == FaultCode::kNone) {
+      state_.fault_detail[0] = '\0';
+    } else {
+      state_.fault_detail = transient_detail_;
+    }
   }
   state_.has_truth = hardware_.ground_truth(state_.truth);
   state_.wheel_angle_rad = current_.wheel_angle_rad;

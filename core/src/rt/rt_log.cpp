@@ -44,6 +44,12 @@ std::string format_log_record(const LogRecord& r) {
       n = std::snprintf(line, sizeof line, "loop cycle %llu t=%.3fs: fault %s (#%.0f)%s%s%s%s%s",
                         cycle, r.stamp_s, fault_name_of(v[0]), v[1], text[0] != '\0' ? ": " : "",
                         text, has_detail ? " (" : "", r.detail.data(), has_detail ? ")" : "");
+      if (n > 0 && (v[2] != 0.0 || v[3] != 0.0) && static_cast<std::size_t>(n) < sizeof line) {
+        // A measured value against its limit (e.g. the odometry check).
+        const int m = std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n),
+                                    " [%.4g, limit %.4g]", v[2], v[3]);
+        if (m > 0) n += m;
+      }
       break;
     case LogCode::kFaultCleared:
       n = std::snprintf(line, sizeof line, "loop cycle %llu t=%.3fs: fault %s cleared", cycle,

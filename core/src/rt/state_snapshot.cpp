@@ -12,6 +12,7 @@ const char* fault_code_name(FaultCode code) noexcept {
     case FaultCode::kDrivetrainError: return "drivetrain_error";
     case FaultCode::kLocalizationError: return "localization_error";
     case FaultCode::kCalibrationError: return "calibration_error";
+    case FaultCode::kOdometryInconsistent: return "odometry_inconsistent";
   }
   return "unknown";
 }

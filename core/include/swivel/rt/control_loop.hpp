@@ -6,7 +6,8 @@
 //
 // Faults stop the robot in a controlled way (zero twist through inverse kinematics) and
 // the loop keeps running:
-//  - a non-finite reading, or a plugin returning kError (or a non-finite pose): mode
+//  - a non-finite reading, a plugin returning kError (or a non-finite pose), or odometry that
+//    keeps disagreeing with the gyro or with itself (OdometryMonitor): mode
 //    kSafeStop with the fault latched until clear_fault() is requested and a cycle runs
 //    clean; the velocity command seen before is then discarded so that only a fresh one
 //    moves the robot again;
@@ -14,7 +15,8 @@
 //    kCommandTimeout; a fresh valid command resumes;
 //  - a non-finite velocity command: rejected, mode kIdle with fault kNonFiniteCommand; a
 //    fresh valid command resumes.
-// Each fault event (not each faulty cycle) is counted and logged through RtLog.
+// Each fault event (not each faulty cycle) is counted and logged through RtLog; the snapshot
+// carries the active fault's code and its cause (StateSnapshot::fault_detail).
 //
 // Calibration: start_calibration() hands the loop a configured Calibration; from the next
 // cycle boundary the mode is kCalibration and the setpoints come from its step() (the
@@ -26,7 +28,8 @@
 // arrives after the calibration moves the robot again.
 //
 // Threads: the loop thread (or the caller of run_cycle()) runs every plugin call. One
-// command-source thread may call push_command(), one motion-capture thread
+// command-source thread may call push_command() (velocity commands go through a latest-value
+// slot: the newest command wins), one motion-capture thread
 // push_motion_capture(), one thread (the configuration watcher) the swap pair, one thread
 // (the calibration runner) the calibration calls; any thread
 // may call latest(), timing(), clear_fault(), running() and now_s().
@@ -42,6 +45,8 @@
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
+#include "swivel/rt/latest_value.hpp"
+#include "swivel/rt/odometry_monitor.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
 #include "swivel/rt/snapshot_buffer.hpp"
@@ -56,6 +61,8 @@ struct LoopOptions {
   int fifo_priority = 80;          ///< SCHED_FIFO priority where permitted
   bool realtime = true;            ///< try SCHED_FIFO, mlockall and /dev/cpu_dma_latency
   double command_timeout_s = 0.5;  ///< older velocity commands stop the robot
+  /// Encoders against the gyro and the drivetrain residual (docs/faults.md).
+  OdometryCheckOptions odometry_check;
 };
 
 /// How a calibration handed back by the loop ended.
@@ -72,7 +79,8 @@ class ControlLoop {
   /// Not real-time safe. The plugins must be configured and the localization reset; they
   /// must outlive the loop (and a swapped-in localization until it is retired).
   /// `localization_name` is copied (truncated to ShortName).
-  /// @throws std::invalid_argument for a rate or timeout that is not finite and positive.
+  /// @throws std::invalid_argument for a rate, timeout or odometry_check limit that is not
+  ///         finite and positive.
   ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
               Localization& localization, const char* localization_name);
   /// Stops the loop if it runs.
@@ -95,8 +103,10 @@ class ControlLoop {
   /// Any thread. Real-time safe.
   [[nodiscard]] bool running() const noexcept { return running_.load(std::memory_order_acquire); }
 
-  /// The command-source thread only (single producer). Real-time safe. False when the ring
-  /// is full (the loop has not run for a while); the command is then dropped.
+  /// The command-source thread only (single producer). Real-time safe, wait-free. Publishes
+  /// `command` into a latest-value slot: the loop takes the newest command at its next cycle,
+  /// and a command it has not taken yet is replaced (under a flood the newest, e.g. a stop,
+  /// always wins). Always true (accepted).
   bool push_command(const VelocityCommand& command) noexcept;
 
   /// The motion-capture thread only (single producer). Real-time safe. The loop hands the
@@ -187,7 +197,9 @@ class ControlLoop {
   void take_pending_calibration(double now_s) noexcept;
   bool step_calibration(double now_s, bool final_stop) noexcept;
   void retire_calibration(CalibrationOutcome outcome, double now_s) noexcept;
-  void raise_fault(FaultCode code, double now_s, const char* detail) noexcept;
+  void raise_fault(FaultCode code, double now_s, const char* detail, double value = 0.0,
+                   double limit = 0.0) noexcept;
+  void check_odometry(const OdometryIncrement& odometry, double now_s) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
   template <class Call>
@@ -217,7 +229,7 @@ class ControlLoop {
   std::atomic<CalibrationOutcome> retired_outcome_{CalibrationOutcome::kNone};
   std::atomic<bool> calibration_in_flight_{false};  // written by the calibrating thread
   std::atomic<bool> cancel_calibration_{false};
-  SpscRing<VelocityCommand, 64> commands_;
+  LatestValue<VelocityCommand> commands_;
   SpscRing<MotionCaptureSample, 64> motion_capture_;
   SnapshotBuffer<StateSnapshot> snapshot_;
   TimingStats timing_;
@@ -234,6 +246,9 @@ class ControlLoop {
   FaultCode latched_fault_ = FaultCode::kNone;    // kSafeStop cause
   FaultCode transient_fault_ = FaultCode::kNone;  // command timeout / rejected command
   FaultCode cycle_fault_ = FaultCode::kNone;      // latched fault raised this cycle
+  FaultDetail latched_detail_{};                  // cause of latched_fault_
+  FaultDetail transient_detail_{};                // cause of transient_fault_
+  OdometryMonitor odometry_monitor_;
 
   // Non-real-time ownership.
   std::thread thread_;

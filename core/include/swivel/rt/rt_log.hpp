@@ -21,7 +21,8 @@ enum class LogLevel : std::uint8_t { kDebug, kInfo, kWarn, kError };
 
 /// What happened. The values a..d of a record mean what the code says.
 enum class LogCode : std::uint16_t {
-  kFaultRaised,            ///< a = FaultCode, b = fault count; detail = plugin message
+  kFaultRaised,            ///< a = FaultCode, b = fault count, c/d = measured value and its
+                           ///< limit (0 when none); detail = cause
   kFaultCleared,           ///< a = the FaultCode that was cleared
   kCommandRejected,        ///< a = sequence; non-finite velocity command
   kMotionCaptureRejected,  ///< a = sample stamp, s; non-finite motion-capture sample

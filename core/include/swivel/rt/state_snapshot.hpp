@@ -27,6 +27,7 @@ enum class FaultCode : std::uint16_t {
   kDrivetrainError,     ///< drivetrain plugin returned kError
   kLocalizationError,   ///< localization plugin returned kError or a non-finite pose
   kCalibrationError,    ///< calibration procedure failed or was cancelled
+  kOdometryInconsistent,  ///< sustained disagreement: encoders vs gyro, or drivetrain residual
 };
 
 const char* fault_code_name(FaultCode code) noexcept;
@@ -41,6 +42,10 @@ struct VelocityCommand {
 /// Fixed-size, NUL-terminated name (plugin names, fault details) that can cross threads.
 using ShortName = std::array<char, 32>;
 
+/// Fixed-size, NUL-terminated cause of a fault (a plugin's last_error() or the loop's own
+/// text, truncated), the same size as RtLog's detail.
+using FaultDetail = std::array<char, 64>;
+
 /// The loop's state at the end of one cycle.
 struct StateSnapshot {
   std::uint64_t cycle = 0;
@@ -54,6 +59,7 @@ struct StateSnapshot {
   std::array<ModuleState, kMaxModules> modules{};
   LoopMode mode = LoopMode::kIdle;
   FaultCode fault = FaultCode::kNone;     ///< active fault (kNone when healthy)
+  FaultDetail fault_detail{};             ///< the active fault's cause ("" when healthy)
   std::uint64_t fault_count = 0;          ///< faults raised since start
   ShortName localization_plugin{};        ///< active localization plugin
   std::uint64_t localization_swaps = 0;   ///< hot swaps taken by the loop
