@@ -4,6 +4,8 @@
 // temporary folder whose simulated robot has the paper's calibrated values (Table 4,
 // config/robots/swpc4_table4.yaml) while the daemon's model has the design values; the
 // calibrated model must come out next to the nominal one and match the simulated robot.
+// The robot ids carry the process id so that concurrent runs of this test on one machine
+// do not answer each other's requests.
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -30,9 +32,18 @@ constexpr const char* kFastProcedure =
     "{locked_angles_deg: [45, 165], yaw_rate_radps: 1.0, rotation_deg: 90, settle_s: 0.5, "
     "stop_s: 0.1, align_hold_s: 0.05, max_steer_rate_radps: 4.0, steer_gain_per_s: 8.0}";
 
-void copy_from_source(const std::string& relative, const fs::path& to) {
+// A robot id of this process: `base` with the process id appended.
+std::string robot_id(const std::string& base) { return base + "_" + std::to_string(getpid()); }
+
+// Copies a shipped robot model under the robot id robot_id(<its name>).
+void copy_robot(const std::string& file, const fs::path& to) {
+  std::string text = read_text(source_dir() + "/config/robots/" + file);
+  const auto at = text.find("\nname: ");
+  const auto end = text.find('\n', at + 1);
+  const std::string name = text.substr(at + 7, end - at - 7);
+  text.replace(at + 7, name.size(), robot_id(name));
   fs::create_directories(to.parent_path());
-  fs::copy_file(fs::path(source_dir()) / relative, to, fs::copy_options::overwrite_existing);
+  std::ofstream(to) << text;
 }
 
 // A copy of a shipped daemon configuration (`config/<name>`) with its robot models and DDS
@@ -42,10 +53,9 @@ class DaemonCopy {
   DaemonCopy(const std::string& test, const std::string& name,
              const std::vector<std::string>& robots, const std::function<void(YAML::Node&)>& edit)
       : dir_(make_test_dir(test)) {
-    for (const auto& robot : robots) {
-      copy_from_source("config/robots/" + robot, fs::path(dir_) / "robots" / robot);
-    }
-    copy_from_source("config/dds/loopback.xml", fs::path(dir_) / "dds/loopback.xml");
+    for (const auto& robot : robots) copy_robot(robot, fs::path(dir_) / "robots" / robot);
+    fs::create_directories(fs::path(dir_) / "dds");
+    fs::copy_file(source_dir() + "/config/dds/loopback.xml", fs::path(dir_) / "dds/loopback.xml");
     YAML::Node config = YAML::LoadFile(source_dir() + "/config/" + name);
     config["loop"]["realtime"] = false;  // no SCHED_FIFO warnings; rates stay valid
     edit(config);
@@ -118,6 +128,7 @@ void swpc4_on_table4(YAML::Node& c, int domain, const std::string& command_sourc
 
 TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) {
   static constexpr int kDomain = 51;
+  const std::string robot = robot_id("swpc4");
   // The shipped script keeps sending velocity commands: the calibration must ignore them.
   DaemonCopy daemon("calibrate", "swiveld_swpc4.yaml", {"swpc4.yaml", "swpc4_table4.yaml"},
                     [](YAML::Node& c) { swpc4_on_table4(c, kDomain, "script"); });
@@ -127,8 +138,8 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
   const std::string nominal_text = read_text(daemon.dir() + "/robots/swpc4.yaml");
 
   const auto started = Clock::now();
-  Child calibrate(swivelctl_exe(), ctl({"calibrate", "start"}, kDomain, "swpc4"));
-  EXPECT_TRUE(wait_for_mode(kDomain, "swpc4", "calibration", Seconds(15)))
+  Child calibrate(swivelctl_exe(), ctl({"calibrate", "start"}, kDomain, robot));
+  EXPECT_TRUE(wait_for_mode(kDomain, robot, "calibration", Seconds(15)))
       << "the loop never reported the calibration mode\n" << daemon.process().err();
   const int code = calibrate.exit_code(Seconds(150));
   const double wall_s = Seconds(Clock::now() - started).count();
@@ -155,7 +166,7 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
   const RobotModel nominal = load_robot_model(daemon.dir() + "/robots/swpc4.yaml");
   ASSERT_EQ(got.drivetrain, DrivetrainKind::kSwpc);
   ASSERT_EQ(got.modules.size(), 4U);
-  EXPECT_EQ(got.name, "swpc4");
+  EXPECT_EQ(got.name, robot);
 
   // x, y, d: reported 1-sigma about 0.05 mm (0.3 mm motion-capture noise), so 0.25 mm is
   // about 5 sigma and below most design-value errors (0.2-2 mm; seen: at most 0.17 mm).
@@ -202,32 +213,33 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
 
 TEST(SwiveldCalibration, CancelStopsTheRobotAndWritesNoModel) {
   static constexpr int kDomain = 53;
+  const std::string robot = robot_id("swpc4");
   DaemonCopy daemon("calibrate_cancel", "swiveld_swpc4.yaml", {"swpc4.yaml", "swpc4_table4.yaml"},
                     [](YAML::Node& c) { swpc4_on_table4(c, kDomain, "none"); });
   ASSERT_TRUE(daemon.process().wait_for_err("calibration: plugin swpc_geometric ready",
                                             Seconds(20)))
       << daemon.process().err();
 
-  const ToolRun start = swivelctl(ctl({"calibrate", "start", "--no-follow"}, kDomain, "swpc4"));
+  const ToolRun start = swivelctl(ctl({"calibrate", "start", "--no-follow"}, kDomain, robot));
   ASSERT_EQ(start.exit_code, 0) << start.out << start.err << daemon.process().err();
   // Into the first run's rotation: the robot turns about the locked wheel.
   const auto deadline = Clock::now() + Seconds(15);
   bool turning = false;
   while (!turning && Clock::now() < deadline) {
-    const ToolRun status = swivelctl(ctl({"calibrate", "status"}, kDomain, "swpc4"));
+    const ToolRun status = swivelctl(ctl({"calibrate", "status"}, kDomain, robot));
     turning = status.out.find("recording") != std::string::npos;
   }
   ASSERT_TRUE(turning) << daemon.process().err();
 
-  const ToolRun cancel = swivelctl(ctl({"calibrate", "cancel"}, kDomain, "swpc4"));
+  const ToolRun cancel = swivelctl(ctl({"calibrate", "cancel"}, kDomain, robot));
   EXPECT_EQ(cancel.exit_code, 0) << cancel.out << cancel.err;
   EXPECT_NE(cancel.out.find("status=cancelled"), std::string::npos) << cancel.out;
 
   // Stopped and staying stopped: no command source, and the calibration gave up the wheels.
   std::this_thread::sleep_for(Seconds(0.3));
-  const json a = state(kDomain, "swpc4");
+  const json a = state(kDomain, robot);
   std::this_thread::sleep_for(Seconds(0.5));
-  const json b = state(kDomain, "swpc4");
+  const json b = state(kDomain, robot);
   ASSERT_TRUE(a.contains("truth") && b.contains("truth")) << a.dump() << b.dump();
   EXPECT_NE(b.value("mode", ""), "calibration") << b.dump();
   EXPECT_NEAR(b["truth"]["x_m"].get<double>(), a["truth"]["x_m"].get<double>(), 1e-3);
@@ -239,19 +251,21 @@ TEST(SwiveldCalibration, CancelStopsTheRobotAndWritesNoModel) {
 
 TEST(SwiveldCalibration, DaemonWithoutCalibrationRefusesWithTheReason) {
   static constexpr int kDomain = 52;
+  const std::string robot = robot_id("docent");
   // The shipped docent configuration: differential drivetrain, no calibration section.
   DaemonCopy daemon("calibrate_docent", "swiveld.yaml", {"docent.yaml"},
                     [](YAML::Node& c) { c["dds"]["domain_id"] = kDomain; });
 
-  const ToolRun run = swivelctl(ctl({"calibrate", "start"}, kDomain, "docent"), Seconds(30));
+  const ToolRun run = swivelctl(ctl({"calibrate", "start"}, kDomain, robot), Seconds(30));
   EXPECT_EQ(run.exit_code, 1) << run.out << run.err << daemon.process().err();
   EXPECT_NE(run.out.find("status=failed"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("refused: robot 'docent' has a differential drivetrain; the "
-                         "calibration (swpc_geometric) needs an swpc robot"),
+  EXPECT_NE(run.out.find("refused: robot '" + robot +
+                         "' has a differential drivetrain; the calibration (swpc_geometric) "
+                         "needs an swpc robot"),
             std::string::npos)
       << run.out;
   EXPECT_TRUE(daemon.process().alive());
-  EXPECT_EQ(state(kDomain, "docent").value("mode", ""), "velocity") << "the script still drives";
+  EXPECT_EQ(state(kDomain, robot).value("mode", ""), "velocity") << "the script still drives";
 }
 
 TEST(SwiveldCalibration, CalibrationSectionOnADifferentialRobotStopsTheStartUp) {
