@@ -38,6 +38,7 @@ StateSnapshot sample_snapshot() {
   s.modules[1] = {0.0, 0.0, 4.0, 3.9};
   s.mode = LoopMode::kVelocity;
   s.fault = FaultCode::kCommandTimeout;
+  std::strncpy(s.fault_detail.data(), "velocity command timed out", s.fault_detail.size() - 1);
   s.fault_count = 3;
   std::strncpy(s.localization_plugin.data(), "kalman", s.localization_plugin.size() - 1);
   s.localization_swaps = 2;
@@ -86,13 +87,14 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   bridge.start();
 
   swivel_msg_RobotState got{};
-  std::string id, plugin, fault;
+  std::string id, plugin, fault, detail;
   ASSERT_TRUE(wait_for([&] {
     return take_one<swivel_msg_RobotState>(state_reader, [&](const swivel_msg_RobotState& s) {
              got = s;
              id = s.robot_id;
              plugin = s.localization_plugin;
              fault = s.fault_text;
+             detail = s.fault_detail;
            }) && id == robot;
   })) << "no RobotState within 10 s";
   EXPECT_GT(got.cycle, 0u);
@@ -114,6 +116,7 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   EXPECT_EQ(got.mode, swivel_msg_LOOP_MODE_VELOCITY);
   EXPECT_EQ(got.fault_code, static_cast<std::uint16_t>(FaultCode::kCommandTimeout));
   EXPECT_EQ(fault, "command_timeout");
+  EXPECT_EQ(detail, "velocity command timed out");
   EXPECT_EQ(got.fault_count, 3u);
   EXPECT_FALSE(got.has_truth);
 
@@ -284,7 +287,8 @@ TEST(DdsBridge, PublishesDiagnostics) {
   d.cycle_time = {5.0, 9.0, 20.0, 31.0};
   d.cycles = 12345;
   d.overruns = 2;
-  d.fault = FaultCode::kNone;
+  d.fault = FaultCode::kHardwareError;
+  d.fault_detail = "sim: hardware not answering";
   d.localization_plugin = "lsm";
   d.drivetrain_plugin = "differential";
   d.hardware_plugin = "sim";
@@ -303,7 +307,7 @@ TEST(DdsBridge, PublishesDiagnostics) {
   bridge.start();
 
   swivel_msg_Diagnostics got{};
-  std::string id, plugin, reload, fault;
+  std::string id, plugin, reload, fault, detail;
   ASSERT_TRUE(wait_for([&] {
     return take_one<swivel_msg_Diagnostics>(reader, [&](const swivel_msg_Diagnostics& m) {
              got = m;
@@ -311,6 +315,7 @@ TEST(DdsBridge, PublishesDiagnostics) {
              plugin = m.localization_plugin;
              reload = m.last_reload_result;
              fault = m.fault_text;
+             detail = m.fault_detail;
            }) && id == robot;
   })) << "no Diagnostics within 10 s";
   EXPECT_DOUBLE_EQ(got.loop_rate_hz, 1000.0);
@@ -319,7 +324,8 @@ TEST(DdsBridge, PublishesDiagnostics) {
   EXPECT_DOUBLE_EQ(got.cycle_time.max_us, 31.0);
   EXPECT_EQ(got.cycles, 12345u);
   EXPECT_EQ(got.overruns, 2u);
-  EXPECT_EQ(fault, "none");
+  EXPECT_EQ(fault, "hardware_error");
+  EXPECT_EQ(detail, "sim: hardware not answering");
   EXPECT_EQ(plugin, "lsm");
   EXPECT_EQ(got.reload_count, 1u);
   EXPECT_FALSE(got.last_reload_ok);

@@ -9,6 +9,11 @@ namespace {
 
 std::string str(const char* s) { return s != nullptr ? s : ""; }
 
+// " (cause)" after the fault name when the daemon reports one.
+bool has_text(const char* s) { return s != nullptr && s[0] != '\0'; }
+const char* detail_open(const char* detail) { return has_text(detail) ? " (" : ""; }
+const char* detail_close(const char* detail) { return has_text(detail) ? ")" : ""; }
+
 nlohmann::json timing(const swivel_msg_TimingStats& t) {
   return {{"p50_us", t.p50_us}, {"p99_us", t.p99_us}, {"p999_us", t.p999_us}, {"max_us", t.max_us}};
 }
@@ -55,6 +60,7 @@ nlohmann::json to_json(const swivel_msg_RobotState& s) {
       {"mode", mode_name(s.mode)},
       {"fault_code", s.fault_code},
       {"fault", str(s.fault_text)},
+      {"fault_detail", str(s.fault_detail)},
       {"fault_count", s.fault_count}};
   if (s.has_truth) {
     j["truth"] = {{"x_m", s.truth_x_m}, {"y_m", s.truth_y_m}, {"yaw_rad", s.truth_yaw_rad}};
@@ -88,6 +94,7 @@ nlohmann::json to_json(const swivel_msg_Diagnostics& s) {
           {"fault_count", s.fault_count},
           {"fault_code", s.fault_code},
           {"fault", str(s.fault_text)},
+          {"fault_detail", str(s.fault_detail)},
           {"commands_received", s.commands_received},
           {"commands_dropped", s.commands_dropped},
           {"plugins",
@@ -116,10 +123,11 @@ nlohmann::json to_json(const swivel_msg_CalibrationResult& s) {
 std::string to_line(const swivel_msg_RobotState& s) {
   return format(
       "%s t=%.3fs x=%.4fm y=%.4fm yaw=%.4frad vx=%.3fm/s vy=%.3fm/s wz=%.3frad/s mode=%s "
-      "localization=%s fault=%s faults=%llu",
+      "localization=%s fault=%s%s%s%s faults=%llu",
       str(s.robot_id).c_str(), s.stamp_s, s.x_m, s.y_m, s.yaw_rad, s.vx_mps, s.vy_mps,
       s.wz_radps, mode_name(s.mode), str(s.localization_plugin).c_str(),
-      str(s.fault_text).c_str(), static_cast<unsigned long long>(s.fault_count));
+      str(s.fault_text).c_str(), detail_open(s.fault_detail), str(s.fault_detail).c_str(),
+      detail_close(s.fault_detail), static_cast<unsigned long long>(s.fault_count));
 }
 
 std::string to_line(const swivel_msg_ModuleStates& s) {
@@ -135,12 +143,13 @@ std::string to_line(const swivel_msg_ModuleStates& s) {
 std::string to_line(const swivel_msg_Diagnostics& s) {
   return format(
       "%s rate=%.1f/%.1fHz lateness p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus "
-      "cycle p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus overruns=%llu fault=%s faults=%llu "
+      "cycle p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus overruns=%llu fault=%s%s%s%s faults=%llu "
       "plugins=%s/%s/%s reloads=%u last_reload=%s%s",
       str(s.robot_id).c_str(), s.measured_rate_hz, s.loop_rate_hz, s.lateness.p50_us,
       s.lateness.p99_us, s.lateness.p999_us, s.lateness.max_us, s.cycle_time.p50_us,
       s.cycle_time.p99_us, s.cycle_time.p999_us, s.cycle_time.max_us,
       static_cast<unsigned long long>(s.overruns), str(s.fault_text).c_str(),
+      detail_open(s.fault_detail), str(s.fault_detail).c_str(), detail_close(s.fault_detail),
       static_cast<unsigned long long>(s.fault_count), str(s.hardware_plugin).c_str(),
       str(s.drivetrain_plugin).c_str(), str(s.localization_plugin).c_str(), s.reload_count,
       s.reload_count == 0 ? "-" : (s.last_reload_ok ? "ok" : "rejected"),

@@ -150,6 +150,7 @@ int run_status(const CommonOptions& common, bool json) {
       r.state->robot_id = nullptr;  // loaned strings: keep copies instead
       r.state->localization_plugin = nullptr;
       r.state->fault_text = nullptr;
+      r.state->fault_detail = nullptr;
       r.localization = s.localization_plugin;
       r.fault = s.fault_text;
     });

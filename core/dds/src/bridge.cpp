@@ -31,6 +31,7 @@ const char* fault_text(FaultCode code) {
     case FaultCode::kDrivetrainError: return "drivetrain_error";
     case FaultCode::kLocalizationError: return "localization_error";
     case FaultCode::kCalibrationError: return "calibration_error";
+    case FaultCode::kOdometryInconsistent: return "odometry_inconsistent";
   }
   return "unknown";
 }
@@ -255,6 +256,9 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.mode = to_msg(s.mode);
   state.fault_code = static_cast<std::uint16_t>(s.fault);
   state.fault_text = const_cast<char*>(fault_text(s.fault));
+  FaultDetail detail = s.fault_detail;
+  detail.back() = '\0';
+  state.fault_detail = detail.data();
   state.fault_count = s.fault_count;
   state.has_truth = s.has_truth;
   state.truth_x_m = s.truth.x_m;
@@ -328,6 +332,7 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.fault_count = d.fault_count;
   msg.fault_code = static_cast<std::uint16_t>(d.fault);
   msg.fault_text = const_cast<char*>(fault_text(d.fault));
+  msg.fault_detail = c_str(d.fault_detail);
   msg.commands_received = commands_received_.load(std::memory_order_relaxed);
   msg.commands_dropped = commands_dropped_.load(std::memory_order_relaxed);
   msg.hardware_plugin = c_str(d.hardware_plugin);

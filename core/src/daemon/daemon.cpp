@@ -347,6 +347,7 @@ dds::DiagnosticsSample Daemon::read_diagnostics() {
   d.overruns = timing.overruns;
   d.fault_count = s.fault_count;
   d.fault = s.fault;
+  d.fault_detail = s.fault_detail.data();
   // Hardware and drivetrain never change while running; the localization is the loop's.
   d.hardware_plugin = hardware_.name();
   d.drivetrain_plugin = drivetrain_.name();

@@ -43,6 +43,7 @@ struct DiagnosticsSample {
   std::uint64_t overruns = 0;
   std::uint64_t fault_count = 0;
   FaultCode fault = FaultCode::kNone;
+  std::string fault_detail;         ///< the active fault's cause ("" when healthy)
   std::string hardware_plugin;
   std::string drivetrain_plugin;
   std::string localization_plugin;
@@ -93,7 +94,7 @@ struct DdsCallbacks {
 struct BridgeCounters {
   std::uint64_t states_published = 0;
   std::uint64_t commands_received = 0;   ///< accepted by on_command
-  std::uint64_t commands_dropped = 0;    ///< rejected by on_command, or no callback
+  std::uint64_t commands_dropped = 0;    ///< refused by on_command, or no callback
   std::uint64_t commands_ignored = 0;    ///< addressed to another robot
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;
