@@ -38,8 +38,7 @@ PluginInstance<Interface> create_plugin(PluginLoader& loader, const PluginConfig
   }
 }
 
-template <class Interface>
-void configure_plugin(Interface& plugin, const PluginConfig& slot, const DaemonConfig& config) {
+PluginContext plugin_context(const PluginConfig& slot, const DaemonConfig& config) {
   PluginContext ctx;
   ctx.params = slot.params;
   ctx.config_file = config.file;
@@ -47,6 +46,12 @@ void configure_plugin(Interface& plugin, const PluginConfig& slot, const DaemonC
   ctx.config_dir = config.config_dir;
   ctx.robot = &config.robot;
   ctx.period_s = config.period_s();
+  return ctx;
+}
+
+template <class Interface>
+void configure_plugin(Interface& plugin, const PluginConfig& slot, const DaemonConfig& config) {
+  const PluginContext ctx = plugin_context(slot, config);
   try {
     plugin.configure(ctx);
   } catch (const ConfigError& e) {
@@ -102,17 +107,6 @@ std::string join(const std::vector<std::string>& items) {
   std::string text;
   for (const auto& item : items) text += (text.empty() ? "" : ", ") + item;
   return text;
-}
-
-PluginContext calibration_context(const DaemonConfig& config) {
-  PluginContext ctx;
-  ctx.params = config.calibration.params;
-  ctx.config_file = config.file;
-  ctx.params_path = config.calibration.params_path;
-  ctx.config_dir = config.config_dir;
-  ctx.robot = &config.robot;
-  ctx.period_s = config.period_s();
-  return ctx;
 }
 
 const char* drivetrain_name(DrivetrainKind kind) {
@@ -202,7 +196,7 @@ void Daemon::start() {
     // The runner calls back with its mutex held, from the thread that called it (the DDS
     // subscriber or the main thread), never from the loop.
     calibration_ = std::make_unique<CalibrationRunner>(
-        *loop_, loader_, config_.robot, config_.robot_model_path, calibration_context(config_),
+        *loop_, loader_, config_.robot, config_.robot_model_path, plugin_context(config_.calibration, config_),
         config_.calibration.plugin, [this](const dds::CalibrationSample& sample) {
           if (sample.status != calibration_logged_ || sample.status != "running") {
             if (sample.status == "failed") {
