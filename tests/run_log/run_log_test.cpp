@@ -124,6 +124,20 @@ TEST(RunLog, UnknownCommentsAndBlankLinesAreIgnored) {
   EXPECT_EQ(log.header.comments, (std::vector<std::string>{"recorded by: bench 3", "note: carpet"}));
 }
 
+TEST(RunLog, HeaderKeysDoNotDependOnTheBlanksAfterTheHash) {
+  // An annotation is written back as "# <text>": were "#swivel-run 2" an annotation, the
+  // copy would read as a version line (found by fuzz_run_log).
+  EXPECT_EQ(expect_error("# swivel-run 1\n#swivel-run 2\n# robot: docent\n"),
+            "run.csv:2: unsupported run log version 2 (this reader reads 1)");
+  const std::string text =
+      "#swivel-run 1\n#robot:docent\n#\tdrivetrain: differential\n#swivel-runner\n"
+      "t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw\n";
+  std::istringstream in(text);
+  const RunLog log = parse_run_log(in, "run.csv");
+  EXPECT_EQ(log.header.robot, "docent");
+  EXPECT_EQ(log.header.comments, (std::vector<std::string>{"swivel-runner"}));
+}
+
 TEST(RunLog, WrongColumnCountNamesTheLine) {
   std::string text = kDifferentialHead;
   for (int k = 0; k < 52; ++k) text += std::to_string(k) + ",0,0,0,0,0,0,,,\n";

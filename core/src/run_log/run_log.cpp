@@ -11,10 +11,13 @@
 namespace swivel {
 namespace {
 
-constexpr std::string_view kVersionPrefix = "# swivel-run ";
-constexpr std::string_view kRobotPrefix = "# robot:";
-constexpr std::string_view kDrivetrainPrefix = "# drivetrain:";
-constexpr std::string_view kModulesPrefix = "# modules:";
+// Header keys, matched on a comment's text after '#' and blanks: "#robot: x" is the robot line
+// as much as "# robot: x". An annotation is written back as "# <text>", so a key must not
+// depend on the blanks after '#', or an annotation could read back as a key.
+constexpr std::string_view kVersionKey = "swivel-run";
+constexpr std::string_view kRobotKey = "robot:";
+constexpr std::string_view kDrivetrainKey = "drivetrain:";
+constexpr std::string_view kModulesKey = "modules:";
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -118,8 +121,11 @@ class Parser {
           fail(std::string("control character ") + code + " in a header comment line");
         }
       }
-      if (starts_with(line, kVersionPrefix) || line == trim(kVersionPrefix)) {
-        const std::string_view value = trim(line.substr(kVersionPrefix.size() - 1));
+      const std::string_view text = trim(line.substr(1));
+      if (text == kVersionKey ||
+          (starts_with(text, kVersionKey) &&
+           (text[kVersionKey.size()] == ' ' || text[kVersionKey.size()] == '\t'))) {
+        const std::string_view value = trim(text.substr(kVersionKey.size()));
         int version = 0;
         const auto r = std::from_chars(value.data(), value.data() + value.size(), version);
         if (r.ec != std::errc() || r.ptr != value.data() + value.size()) {
@@ -131,10 +137,10 @@ class Parser {
                std::to_string(kRunLogVersion) + ")");
         }
         have_version = true;
-      } else if (starts_with(line, kRobotPrefix)) {
-        header.robot = std::string(trim(line.substr(kRobotPrefix.size())));
-      } else if (starts_with(line, kDrivetrainPrefix)) {
-        const std::string_view value = trim(line.substr(kDrivetrainPrefix.size()));
+      } else if (starts_with(text, kRobotKey)) {
+        header.robot = std::string(trim(text.substr(kRobotKey.size())));
+      } else if (starts_with(text, kDrivetrainKey)) {
+        const std::string_view value = trim(text.substr(kDrivetrainKey.size()));
         if (value == "differential") {
           header.drivetrain = DrivetrainKind::kDifferential;
         } else if (value == "swpc") {
@@ -143,8 +149,8 @@ class Parser {
           fail("expected drivetrain 'differential' or 'swpc', got '" + std::string(value) + "'");
         }
         have_drivetrain = true;
-      } else if (starts_with(line, kModulesPrefix)) {
-        const std::string_view value = trim(line.substr(kModulesPrefix.size()));
+      } else if (starts_with(text, kModulesKey)) {
+        const std::string_view value = trim(text.substr(kModulesKey.size()));
         std::size_t n = 0;
         const auto r = std::from_chars(value.data(), value.data() + value.size(), n);
         if (r.ec != std::errc() || r.ptr != value.data() + value.size()) {
@@ -154,7 +160,7 @@ class Parser {
         have_modules = true;
       } else if (have_version) {
         // Any other comment is an annotation: kept, never interpreted.
-        header.comments.emplace_back(trim(line.substr(1)));
+        header.comments.emplace_back(text);
       }
     }
     if (!have_version) {
