@@ -96,9 +96,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     default: return 0;  // Cyclone refuses other encapsulations before deserialising
   }
   // Normalisation byte-swaps in place and the stream reads whole words: a private,
-  // 8-byte-aligned copy, as Cyclone's receive buffers are.
+  // 8-byte-aligned copy, as Cyclone's receive buffers are, with zeroed slack past the end
+  // for the over-read below.
   const std::size_t body = size - 5;
-  std::vector<std::uint64_t> buffer(body / 8 + 1);
+  std::vector<std::uint64_t> buffer(body / 8 + 2);
   std::memcpy(buffer.data(), data + 5, body);
   auto* bytes = reinterpret_cast<char*>(buffer.data());
   std::uint32_t offset = 0;
@@ -106,7 +107,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                 desc.m_ops) == nullptr) {
     return 0;  // malformed: dropped by the reader
   }
-  if (offset > body) swivel::fuzz::contract_broken(kTarget, "normalised past the end");
+  // Cyclone 0.10.2 (Debian 12) checks only 4 bytes, not 8, for the last 8-byte member of an
+  // XCDR2 body: a body up to 4 bytes short is accepted and its last double takes bytes past
+  // the payload (regressions/fuzz_dds_samples/xcdr2_last_double_4_bytes_short.bin). Nothing
+  // in Swivel can see the payload size behind dds_take; the values reach the loop as any
+  // sender's values would and are validated there. Anything beyond those 4 bytes is a crash.
+  const std::size_t slack = xcdr == 2 ? 4 : 0;
+  if (offset > body + slack) swivel::fuzz::contract_broken(kTarget, "normalised past the end");
 
   std::vector<std::uint64_t> storage(desc.m_size / 8 + 1, 0);
   void* sample = storage.data();
