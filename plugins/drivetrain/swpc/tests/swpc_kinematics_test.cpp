@@ -269,7 +269,7 @@ TEST(SwpcKinematics, SelfAlignedAngleStopsTheSteeringWithTheWheelRollingForward)
   ASSERT_TRUE(self_aligned_steer_angle(design_modules()[0], {0.0, -0.3, 0.0}, phi));
   EXPECT_NEAR(phi, -kPi / 2, 1e-15);
   // Turning about the steering axis itself: no steady state.
-  const SwpcModuleParams& m = design_modules()[0];
+  const SwpcModuleParams m = design_modules()[0];  // a copy: the vector is a temporary
   EXPECT_FALSE(self_aligned_steer_angle(m, {m.y_m * 0.5, -m.x_m * 0.5, 0.5}, phi));
 }
 
