@@ -146,14 +146,17 @@ TEST(Swiveld, DrivesTheScriptedArcAndStopsCleanlyOnSigterm) {
   EXPECT_NE(last.rest.find("mode velocity fault none"), std::string::npos) << last.rest;
   EXPECT_NE(last.rest.find("cmd vx=0.20 vy=0.00 wz=0.30"), std::string::npos) << last.rest;
 
-  // The commanded arc: v = 0.2 m/s, w = 0.3 rad/s from t = 0, radius v/w.
+  // The commanded arc: v = 0.2 m/s, w = 0.3 rad/s, radius v/w, from the origin. The robot is
+  // on that arc at the point its heading says (within wheel-speed tracking, 1 cm) ...
   const double v = 0.2, w = 0.3, r = v / w, t = last.t_s;
   ASSERT_GT(t, 1.5);
-  const double x = r * std::sin(w * t), y = r * (1.0 - std::cos(w * t)), yaw = w * t;
-  // 4 cm / 0.04 rad: a few cycles of start-up delay and wheel-speed tracking, over ~0.4 m.
-  EXPECT_NEAR(last.truth_x_m, x, 0.04) << last.rest;
-  EXPECT_NEAR(last.truth_y_m, y, 0.04) << last.rest;
-  EXPECT_NEAR(last.truth_yaw_rad, yaw, 0.04) << last.rest;
+  const double yaw = last.truth_yaw_rad;
+  EXPECT_NEAR(last.truth_x_m, r * std::sin(yaw), 0.01) << last.rest;
+  EXPECT_NEAR(last.truth_y_m, r * (1.0 - std::cos(yaw)), 0.01) << last.rest;
+  // ... and has come as far along it as the time allows, less a start-up delay (the first
+  // command, wheel-speed tracking) of at most 0.5 s, which a loaded machine can stretch.
+  EXPECT_LE(yaw, w * t + 0.02) << last.rest;
+  EXPECT_GE(yaw, w * (t - 0.5)) << last.rest;
   // Dead reckoning from a nominal model equal to the true one stays within centimetres.
   EXPECT_NEAR(last.x_m, last.truth_x_m, 0.02) << last.rest;
   EXPECT_NEAR(last.y_m, last.truth_y_m, 0.02) << last.rest;
