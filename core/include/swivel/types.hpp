@@ -58,6 +58,10 @@ enum class ModuleDriveMode : std::uint8_t {
   kVelocity = 0,   ///< wheel rate and steering rate setpoints are tracked
   kLocked = 1,     ///< steering and wheel held still (calibration pivot)
   kFreeSteer = 2,  ///< wheel rate tracked, steering left free to self-align
+  /// Wheel driven by a constant torque, steering free (PAPERS.md §1's calibration drive): the
+  /// wheel rolls without slipping at whatever rate the motion asks; the wheel-rate setpoint
+  /// only sets the pace (a simulator) or the torque level (hardware).
+  kTorque = 3,
 };
 
 /// Actuator setpoints of one cycle.

@@ -58,7 +58,7 @@ void SwpcGeometricCalibration::configure(const PluginContext& ctx) {
   }
   const double yaw_rate = params.number_or("yaw_rate_radps", 0.3, 0.01, 3.0);
   yaw_sign_ = params.choice_or("direction", "ccw", {"ccw", "cw"}) == "ccw" ? 1.0 : -1.0;
-  rotation_rad_ = params.number_or("rotation_deg", 90.0, 30.0, 340.0) * kDegToRad;
+  rotation_rad_ = params.number_or("rotation_deg", 300.0, 30.0, 340.0) * kDegToRad;
   settle_s_ = params.number_or("settle_s", 1.0, 0.0, 60.0);
   stop_s_ = params.number_or("stop_s", 0.5, 0.0, 60.0);
   align_tolerance_rad_ = params.number_or("align_tolerance_deg", 0.5, 0.01, 10.0) * kDegToRad;
@@ -70,6 +70,9 @@ void SwpcGeometricCalibration::configure(const PluginContext& ctx) {
   run_timeout_s_ =
       params.number_or("run_timeout_s", 3.0 * rotation_rad_ / yaw_rate + 5.0, 1.0, 3600.0);
   mocap_timeout_s_ = params.number_or("motion_capture_timeout_s", 0.5, 0.01, 60.0);
+  drive_mode_ = params.choice_or("wheel_drive", "torque", {"torque", "velocity"}) == "torque"
+                    ? ModuleDriveMode::kTorque
+                    : ModuleDriveMode::kFreeSteer;
   params.finish();
 
   // Plans: where the casters self-align about each pivot, and the wheel rates that agree
@@ -173,7 +176,7 @@ void SwpcGeometricCalibration::drive(const RunPlan& plan, bool wheels_on,
       out.mode[i] = ModuleDriveMode::kLocked;
       out.wheel_rate_radps[i] = 0.0;
     } else {
-      out.mode[i] = ModuleDriveMode::kFreeSteer;
+      out.mode[i] = drive_mode_;
       out.wheel_rate_radps[i] = wheels_on ? plan.wheel_rate_radps[i] : 0.0;
     }
   }

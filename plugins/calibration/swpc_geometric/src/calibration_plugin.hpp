@@ -5,8 +5,8 @@
 // For each module in turn and each locked angle: steer every module to its start angle
 // (closed loop on the measured steering; the locked module to the locked angle, the others
 // to the angle at which they are self-aligned for a rotation about the locked wheel's
-// contact point), lock the module (kLocked), drive the others at constant wheel rates with
-// free steering (kFreeSteer), let the casters settle, record every motion-capture sample
+// contact point), lock the module (kLocked), drive the others with free steering (kTorque,
+// or kFreeSteer at constant wheel rates), let the casters settle, record every motion-capture sample
 // with the same cycle's encoder readings until the robot has turned `rotation_deg`, stop,
 // then the next run.
 //
@@ -14,13 +14,18 @@
 // distance from module i's contact point to the pivot, so that the wheels agree about the
 // rotation. On velocity-controlled wheels an error of the nominal model in the ratio of
 // the radii or lever arms shows as slip and biases the radii (a common scale is
-// recovered); wheels in torque control, as in the paper, roll as the rotation asks.
+// recovered); wheels in torque control, as in the paper, roll as the rotation asks, which
+// is why torque is the default.
 //
 // params (all optional):
+//   wheel_drive: torque            torque (kTorque: the wheels roll freely) | velocity
+//                                  (kFreeSteer: constant wheel rates)
 //   locked_angles_deg: [45, 165]   measured steering angles of the locked module, two
 //   yaw_rate_radps: 0.3            robot rotation rate the wheel rates are chosen for
 //   direction: ccw                 ccw | cw
-//   rotation_deg: 90               rotation recorded per run
+//   rotation_deg: 300              rotation recorded per run: the steering offset's error is
+//                                  the pivot's over the caster offset (0.05 mm / 20 mm =
+//                                  0.14 deg), and a long arc fixes the pivot best
 //   settle_s: 1.0                  driven before recording starts (casters self-align)
 //   stop_s: 0.5                    wheels at zero between runs
 //   align_tolerance_deg: 0.5       steering alignment tolerance
@@ -93,6 +98,7 @@ class SwpcGeometricCalibration final : public Calibration {
   std::uint32_t n_ = 0;
   std::array<double, kRunsPerModule> locked_angles_rad_{};
   double yaw_sign_ = 1.0;
+  ModuleDriveMode drive_mode_ = ModuleDriveMode::kTorque;  // how the free modules are driven
   double rotation_rad_ = 0.0;
   double settle_s_ = 1.0;
   double stop_s_ = 0.5;

@@ -276,7 +276,7 @@ Status SimHardware::write(const ActuatorCommand& command) noexcept {
       return Status::kError;
     }
     if (static_cast<std::uint8_t>(command.mode[i]) >
-        static_cast<std::uint8_t>(ModuleDriveMode::kFreeSteer)) {
+        static_cast<std::uint8_t>(ModuleDriveMode::kTorque)) {
       last_error_ = "sim: unknown module drive mode";
       return Status::kError;
     }

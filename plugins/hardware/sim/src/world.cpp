@@ -124,7 +124,7 @@ Status World::step(double dt_s, const ActuatorCommand& command) noexcept {
       return Status::kError;
     }
     const auto mode = static_cast<std::uint8_t>(command.mode[i]);
-    if (mode > static_cast<std::uint8_t>(ModuleDriveMode::kFreeSteer)) {
+    if (mode > static_cast<std::uint8_t>(ModuleDriveMode::kTorque)) {
       last_error_ = "sim: unknown module drive mode";
       return Status::kError;
     }
@@ -204,23 +204,32 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     }
     twist_ = t;
 
+    // What each encoder sees: the wheel's own rate, or for a torque-driven wheel the rate at
+    // which it rolls without slipping (contact point's speed along the wheel over the radius).
+    std::array<double, kMaxModules> encoder_rate{};
+    for (std::size_t i = 0; i < n_; ++i) encoder_rate[i] = modules_[i].wheel_rate_radps;
     if (swpc) {
       for (std::size_t i = 0; i < n_; ++i) {
         ModuleState& m = modules_[i];
-        if (command.mode[i] == ModuleDriveMode::kFreeSteer) {
+        const ModuleDriveMode mode = command.mode[i];
+        if (mode == ModuleDriveMode::kFreeSteer || mode == ModuleDriveMode::kTorque) {
           // No lateral slip of the contact point: the caster turns into its direction of
           // travel.
           const SwpcModuleParams& p = plant_.modules[i];
           double vsx = 0.0;
           double vsy = 0.0;
           swpc::steering_axis_velocity(p, t, vsx, vsy);
-          const double n_dot_vs = -std::sin(m.phi_rad) * vsx + std::cos(m.phi_rad) * vsy;
-          m.steer_rate_radps = n_dot_vs / p.caster_offset_m - t.wz_radps;
+          const double c = std::cos(m.phi_rad);
+          const double s = std::sin(m.phi_rad);
+          m.steer_rate_radps = (-s * vsx + c * vsy) / p.caster_offset_m - t.wz_radps;
+          if (mode == ModuleDriveMode::kTorque) {
+            encoder_rate[i] = (c * vsx + s * vsy) / p.wheel_radius_m;
+          }
         }
         m.phi_rad += m.steer_rate_radps * h;
       }
     }
-    for (std::size_t i = 0; i < n_; ++i) modules_[i].psi_rad += modules_[i].wheel_rate_radps * h;
+    for (std::size_t i = 0; i < n_; ++i) modules_[i].psi_rad += encoder_rate[i] * h;
     const Pose2 delta = swpc::integrate_twist(t, h);
     pose_ = compose(pose_, delta);
     yaw_unwrapped_rad_ += delta.yaw_rad;

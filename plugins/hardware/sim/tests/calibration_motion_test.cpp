@@ -97,6 +97,48 @@ TEST_P(CalibrationMotionTest, RobotTurnsAboutTheLockedContactAndCastersSelfAlign
 
 INSTANTIATE_TEST_SUITE_P(EveryModuleLocked, CalibrationMotionTest, ::testing::Values(0, 1, 2, 3));
 
+// The paper's drive: torque-driven wheels roll as the rotation asks (no slip), whatever
+// rates the nominal model would have commanded; velocity-tracked ones slip against each other.
+TEST(CalibrationMotion, TorqueDrivenWheelsRollWithoutSlipVelocityTrackedOnesSlip) {
+  const RobotModel nominal = swpc4();
+  const RobotModel truth = perturbed_truth();
+  const CalibrationMotion motion{0, 45.0 * std::numbers::pi / 180.0, 0.3};
+  const OpenLoopController controller(nominal);
+  ActuatorCommand command;
+  Twist2 commanded;
+  ASSERT_TRUE(controller.calibration(motion, command, commanded));
+  double worst_slip[2] = {0.0, 0.0};  // |r dpsi - L dtheta| / (L dtheta): torque, velocity
+  for (int torque = 0; torque < 2; ++torque) {
+    for (std::size_t i = 1; i < 4; ++i) {
+      command.mode[i] = torque == 1 ? ModuleDriveMode::kTorque : ModuleDriveMode::kFreeSteer;
+    }
+    SimOptions options;
+    options.sensor_noise = false;
+    options.initial_steer_rad = calibration_steer_angles(resolve_plant(truth), motion);
+    World world(truth, options);
+    const Pose2 pivot = world.contact_point_world(0);
+    std::array<double, 4> lever{};
+    std::array<double, 4> psi0{};
+    for (std::size_t i = 1; i < 4; ++i) {
+      const Pose2 c = world.contact_point_world(i);
+      lever[i] = std::hypot(c.x_m - pivot.x_m, c.y_m - pivot.y_m);
+      psi0[i] = world.true_wheel_rad(i);
+    }
+    const double yaw0 = world.true_pose().yaw_rad;
+    world.step(2.0, command);
+    const double turned = std::abs(world.true_pose().yaw_rad - yaw0);
+    ASSERT_GT(turned, 0.3);
+    for (std::size_t i = 1; i < 4; ++i) {
+      const double rolled = truth.modules[i].wheel_radius_m * (world.true_wheel_rad(i) - psi0[i]);
+      const double arc = lever[i] * turned;
+      worst_slip[torque == 1 ? 0 : 1] =
+          std::max(worst_slip[torque == 1 ? 0 : 1], std::abs(std::abs(rolled) - arc) / arc);
+    }
+  }
+  EXPECT_LT(worst_slip[0], 1e-4);   // torque: the encoders measure the arcs
+  EXPECT_GT(worst_slip[1], 1e-3);   // velocity: commanded with the design radii, they slip
+}
+
 TEST(CalibrationMotion, TwoLockedModulesHoldTheRobot) {
   const RobotModel model = swpc4();
   SimOptions options;

@@ -13,6 +13,8 @@
 //      kFreeSteer  wheel rate tracked, steering free: the module contributes its rolling
 //                  equation and its steering follows the no-lateral-slip condition
 //                  phi_dot = (n . v_s)/d - w, so the caster self-aligns;
+//      kTorque     as kFreeSteer for the pace, but the wheel rolls without slipping: its
+//                  encoder follows the contact point's motion, as a torque-driven wheel's does;
 //      kLocked     wheel and steering held: its contact point cannot move, so the robot can
 //                  only rotate about it; the rotation rate is the least-squares fit of the
 //                  other modules' equations (the calibration motion of PAPERS.md §1).
