@@ -155,7 +155,7 @@ TEST_F(DaemonConfigTest, RepositorySwpc4ConfigRunsTheGeometricCalibration) {
   EXPECT_EQ(c.robot.name, "swpc4");
   ASSERT_TRUE(c.has_calibration());
   EXPECT_EQ(c.calibration.plugin, "swpc_geometric");
-  EXPECT_EQ(c.calibration.params["rotation_deg"].as<double>(), 90.0);
+  EXPECT_EQ(c.calibration.params["rotation_deg"].as<double>(), 300.0);
 }
 
 TEST_F(DaemonConfigTest, RepositoryDefaultConfigIsValid) {
