@@ -19,23 +19,6 @@ namespace swivel::dds {
 
 namespace {
 
-// Same names as swivel::fault_code_name (core runtime); kept here so that the bridge does
-// not pull in the real-time runtime.
-const char* fault_text(FaultCode code) {
-  switch (code) {
-    case FaultCode::kNone: return "none";
-    case FaultCode::kCommandTimeout: return "command_timeout";
-    case FaultCode::kNonFiniteCommand: return "non_finite_command";
-    case FaultCode::kNonFiniteSensor: return "non_finite_sensor";
-    case FaultCode::kHardwareError: return "hardware_error";
-    case FaultCode::kDrivetrainError: return "drivetrain_error";
-    case FaultCode::kLocalizationError: return "localization_error";
-    case FaultCode::kCalibrationError: return "calibration_error";
-    case FaultCode::kOdometryInconsistent: return "odometry_inconsistent";
-  }
-  return "unknown";
-}
-
 swivel_msg_LoopMode to_msg(LoopMode mode) {
   switch (mode) {
     case LoopMode::kIdle: return swivel_msg_LOOP_MODE_IDLE;
@@ -255,7 +238,7 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.localization_swaps = s.localization_swaps;
   state.mode = to_msg(s.mode);
   state.fault_code = static_cast<std::uint16_t>(s.fault);
-  state.fault_text = const_cast<char*>(fault_text(s.fault));
+  state.fault_text = const_cast<char*>(fault_code_name(s.fault));
   FaultDetail detail = s.fault_detail;
   detail.back() = '\0';
   state.fault_detail = detail.data();
@@ -331,7 +314,7 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.overruns = d.overruns;
   msg.fault_count = d.fault_count;
   msg.fault_code = static_cast<std::uint16_t>(d.fault);
-  msg.fault_text = const_cast<char*>(fault_text(d.fault));
+  msg.fault_text = const_cast<char*>(fault_code_name(d.fault));
   msg.fault_detail = c_str(d.fault_detail);
   msg.commands_received = commands_received_.load(std::memory_order_relaxed);
   msg.commands_dropped = commands_dropped_.load(std::memory_order_relaxed);

@@ -30,7 +30,22 @@ enum class FaultCode : std::uint16_t {
   kOdometryInconsistent,  ///< sustained disagreement: encoders vs gyro, or drivetrain residual
 };
 
-const char* fault_code_name(FaultCode code) noexcept;
+/// Stable snake_case name of a fault (status lines, logs, DDS). Header-only so that the DDS
+/// bridge needs no real-time runtime for it.
+inline const char* fault_code_name(FaultCode code) noexcept {
+  switch (code) {
+    case FaultCode::kNone: return "none";
+    case FaultCode::kCommandTimeout: return "command_timeout";
+    case FaultCode::kNonFiniteCommand: return "non_finite_command";
+    case FaultCode::kNonFiniteSensor: return "non_finite_sensor";
+    case FaultCode::kHardwareError: return "hardware_error";
+    case FaultCode::kDrivetrainError: return "drivetrain_error";
+    case FaultCode::kLocalizationError: return "localization_error";
+    case FaultCode::kCalibrationError: return "calibration_error";
+    case FaultCode::kOdometryInconsistent: return "odometry_inconsistent";
+  }
+  return "unknown";
+}
 
 /// A velocity command as it enters the loop.
 struct VelocityCommand {
