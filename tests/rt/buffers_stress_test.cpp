@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/snapshot_buffer.hpp"
 #include "swivel/rt/spsc_ring.hpp"
 
@@ -99,6 +100,44 @@ TEST(SnapshotBufferStress, ReadersNeverSeeTornOrOlderValues) {
     EXPECT_EQ(backwards[r], 0U) << "reader " << r;
   }
   EXPECT_EQ(buffer.read().words[0], kItems / 4);
+}
+
+TEST(LatestValueStress, ConsumerGetsOnlyWholeNewerValuesAndFinallyTheNewest) {
+  static LatestValue<Item> latest;
+  std::atomic<bool> done{false};
+  std::uint64_t taken = 0;
+  std::uint64_t torn = 0;
+  std::uint64_t not_newer = 0;
+  std::uint64_t last = 0;
+  std::thread consumer([&] {
+    Item item{};
+    // Once `done` is seen, one more take() collects whatever was published last.
+    for (bool finishing = false;; ) {
+      finishing = done.load(std::memory_order_acquire);
+      if (latest.take(item)) {
+        ++taken;
+        if (item.check != ~item.sequence || item.payload[2] != static_cast<double>(item.sequence)) {
+          ++torn;
+        }
+        if (item.sequence <= last) ++not_newer;
+        last = item.sequence;
+      }
+      if (finishing) break;
+    }
+  });
+  std::uint64_t replaced = 0;
+  for (std::uint64_t i = 1; i <= kItems; ++i) {
+    const auto value = static_cast<double>(i);
+    if (latest.publish(Item{i, ~i, {value, value, value}})) ++replaced;
+  }
+  done.store(true, std::memory_order_release);
+  consumer.join();
+  EXPECT_EQ(torn, 0U);
+  EXPECT_EQ(not_newer, 0U);
+  EXPECT_EQ(last, kItems) << "the newest value must win";
+  EXPECT_GT(taken, 0U);
+  // Every value was either taken or replaced by a newer one before it was.
+  EXPECT_EQ(taken + replaced, kItems);
 }
 
 }  // namespace
