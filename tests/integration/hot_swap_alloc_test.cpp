@@ -124,8 +124,13 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
     }
     auto next = make<Localization>(loader, swap.name, swap.params, robot);
     next->reset(loop.latest().estimate);
+    const std::uint64_t swaps_before = loop.latest().localization_swaps;
     ASSERT_TRUE(loop.request_localization_swap(next.get(), swap.name));
-    while (loop.swap_pending()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    // Taken (swap_pending() false) happens at the start of a cycle; the snapshot naming the
+    // new plugin is published at its end.
+    while (loop.swap_pending() || loop.latest().localization_swaps == swaps_before) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
     Localization* retired = loop.take_retired_localization();
     ASSERT_EQ(retired, localization.get());
     localization = std::move(next);  // destroys the retired instance here, off the loop
