@@ -55,14 +55,7 @@ RobotModel design_model() {
 
 RobotModel table4_model() {
   RobotModel m = design_model();
-  const double x[] = {216.16, 216.52, -216.22, -216.67};
-  const double y[] = {126.96, -124.74, -125.26, 126.47};
-  const double delta[] = {0.6349, 1.5247, 0.9764, 1.2154};
-  const double d[] = {20.3907, 20.2223, 20.3055, 20.2897};
-  const double r[] = {54.3960, 54.7413, 55.9731, 55.6682};
-  for (std::size_t i = 0; i < 4; ++i) {
-    m.modules[i] = {x[i] * 1e-3, y[i] * 1e-3, delta[i] * kDeg, d[i] * 1e-3, r[i] * 1e-3};
-  }
+  m.modules = calibration::paper_table4_modules();
   return m;
 }
 

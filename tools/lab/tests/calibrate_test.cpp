@@ -31,15 +31,7 @@ class LabCalibrateTest : public ::testing::Test {
     std::filesystem::create_directories(dir_);
     nominal_ = source_dir() + "/config/robots/swpc4.yaml";
     // The true robot: the paper's calibrated values (Table 4).
-    RobotModel truth = load_robot_model(nominal_);
-    const double x[] = {216.16, 216.52, -216.22, -216.67};
-    const double y[] = {126.96, -124.74, -125.26, 126.47};
-    const double delta[] = {0.6349, 1.5247, 0.9764, 1.2154};
-    const double d[] = {20.3907, 20.2223, 20.3055, 20.2897};
-    const double r[] = {54.3960, 54.7413, 55.9731, 55.6682};
-    for (std::size_t i = 0; i < 4; ++i) {
-      truth.modules[i] = {x[i] * 1e-3, y[i] * 1e-3, delta[i] * kDeg, d[i] * 1e-3, r[i] * 1e-3};
-    }
+    const RobotModel truth = load_robot_model(source_dir() + "/config/robots/swpc4_table4.yaml");
     truth_ = truth;
     save_robot_model(truth, (dir_ / "truth.yaml").string());
   }

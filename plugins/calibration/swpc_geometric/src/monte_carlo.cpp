@@ -32,6 +32,21 @@ std::vector<SwpcModuleParams> paper_design_modules() {
   return modules;
 }
 
+std::vector<SwpcModuleParams> paper_table4_modules() {
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double x_mm[] = {216.16, 216.52, -216.22, -216.67};
+  const double y_mm[] = {126.96, -124.74, -125.26, 126.47};
+  const double delta_deg[] = {0.6349, 1.5247, 0.9764, 1.2154};
+  const double d_mm[] = {20.3907, 20.2223, 20.3055, 20.2897};
+  const double r_mm[] = {54.3960, 54.7413, 55.9731, 55.6682};
+  std::vector<SwpcModuleParams> modules(4);
+  for (std::size_t i = 0; i < 4; ++i) {
+    modules[i] = {x_mm[i] * 1e-3, y_mm[i] * 1e-3, delta_deg[i] * kDeg, d_mm[i] * 1e-3,
+                  r_mm[i] * 1e-3};
+  }
+  return modules;
+}
+
 MonteCarloResult run_monte_carlo(const MonteCarloOptions& options) {
   const Clock::time_point start = Clock::now();
   MonteCarloResult res;

@@ -18,6 +18,11 @@ namespace swivel::calibration {
 /// delta 0, d 20 mm, r 55 mm.
 std::vector<SwpcModuleParams> paper_design_modules();
 
+/// The paper's calibrated values of its real robot (PAPERS.md §1, Table 4), in metres and
+/// radians: a true robot unlike the design, for simulations (config/robots/swpc4_table4.yaml
+/// holds the same values).
+std::vector<SwpcModuleParams> paper_table4_modules();
+
 struct MonteCarloOptions {
   std::size_t trials = 10000;
   std::uint64_t seed = 1;
