@@ -2,98 +2,35 @@
 // robot moves as commanded, SIGTERM stops it cleanly within a second, bad configurations
 // are refused with a message.
 
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "process_util.hpp"
+
 namespace {
 
+using swivel::test::Child;
+using swivel::test::source_dir;
+using swivel::test::swiveld_exe;
 using Clock = std::chrono::steady_clock;
 
-std::string env(const char* name) {
-  const char* value = std::getenv(name);
-  return value != nullptr ? value : "";
-}
-
-std::string swiveld() { return env("SWIVEL_BUILD_DIR") + "/bin/swiveld"; }
 std::string test_config(const std::string& name) {
-  return env("SWIVEL_SOURCE_DIR") + "/tests/integration/configs/" + name;
+  return source_dir() + "/tests/integration/configs/" + name;
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// A swiveld child process with stdout and stderr captured in files.
-class Process {
- public:
-  explicit Process(const std::vector<std::string>& args) {
-    const std::string base = testing::TempDir() + "/swiveld_e2e_" + std::to_string(getpid());
-    out_ = base + ".out";
-    err_ = base + ".err";
-    pid_ = fork();
-    if (pid_ == 0) {
-      const int out = open(out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      const int err = open(err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(out, STDOUT_FILENO);
-      dup2(err, STDERR_FILENO);
-      std::vector<char*> argv;
-      const std::string exe = swiveld();
-      argv.push_back(const_cast<char*>(exe.c_str()));
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(exe.c_str(), argv.data());
-      _exit(127);
-    }
-  }
-  ~Process() {
-    if (pid_ > 0 && !exit_status_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    std::remove(out_.c_str());
-    std::remove(err_.c_str());
-  }
-
-  /// Waits up to `limit` for the process to exit; its wait status, or nothing on timeout.
-  std::optional<int> wait_for(std::chrono::duration<double> limit) {
-    const auto deadline = Clock::now() + limit;
-    while (!exit_status_ && Clock::now() < deadline) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        exit_status_ = status;
-      } else {
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-      }
-    }
-    return exit_status_;
-  }
-
-  void signal(int sig) const { kill(pid_, sig); }
-  [[nodiscard]] std::string out() const { return read_file(out_); }
-  [[nodiscard]] std::string err() const { return read_file(err_); }
-
- private:
-  pid_t pid_ = -1;
-  std::string out_;
-  std::string err_;
-  std::optional<int> exit_status_;
+// swiveld with `args`, stdout and stderr captured.
+struct Process : Child {
+  explicit Process(const std::vector<std::string>& args) : Child(swiveld_exe(), args) {}
 };
 
 struct StatusLine {
@@ -187,7 +124,7 @@ TEST(Swiveld, RefusesMissingPluginNamingIt) {
 }
 
 TEST(Swiveld, CheckValidatesTheDefaultConfigurationAndExits) {
-  Process daemon({"--config", env("SWIVEL_SOURCE_DIR") + "/config/swiveld.yaml", "--check"});
+  Process daemon({"--config", source_dir() + "/config/swiveld.yaml", "--check"});
   const auto status = daemon.wait_for(std::chrono::seconds(10));
   ASSERT_TRUE(status && WIFEXITED(*status));
   EXPECT_EQ(WEXITSTATUS(*status), 0) << daemon.err();
