@@ -68,6 +68,13 @@ void expect_same(const RobotModel& a, const RobotModel& b) {
   EXPECT_EQ(a.sensors.motion_capture.position_noise_m, b.sensors.motion_capture.position_noise_m);
   EXPECT_EQ(a.sensors.motion_capture.yaw_noise_rad, b.sensors.motion_capture.yaw_noise_rad);
   EXPECT_EQ(a.sensors.motion_capture.rate_hz, b.sensors.motion_capture.rate_hz);
+  EXPECT_EQ(a.limits.linear_velocity_mps, b.limits.linear_velocity_mps);
+  EXPECT_EQ(a.limits.angular_velocity_radps, b.limits.angular_velocity_radps);
+  EXPECT_EQ(a.limits.linear_acceleration_mps2, b.limits.linear_acceleration_mps2);
+  EXPECT_EQ(a.limits.angular_acceleration_radps2, b.limits.angular_acceleration_radps2);
+  EXPECT_EQ(a.limits.linear_jerk_mps3, b.limits.linear_jerk_mps3);
+  EXPECT_EQ(a.limits.angular_jerk_radps3, b.limits.angular_jerk_radps3);
+  EXPECT_EQ(a.limits.steering_rate_radps, b.limits.steering_rate_radps);
   EXPECT_EQ(a.effects, b.effects);
 }
 
@@ -189,6 +196,42 @@ TEST(RobotModel, RejectsNonNumericEffectParameter) {
   text.replace(text.find("0.006}"), 5, "large");
   EXPECT_EQ(error_of(text),
             "robot.yaml:11:15: effects.gyro_bias.bias_rad_s: expected a number, got 'large'");
+}
+
+const std::string kSwpcLimits = R"(limits:
+  linear_acceleration_mps2: 0.6
+  angular_acceleration_radps2: 2.0
+  steering_rate_radps: 6.0
+  linear_jerk_mps3: 5
+)";
+
+TEST(RobotModel, LimitsAreOptionalAndRoundTrip) {
+  const RobotModel without = parse_robot_model(kSwpc, "cart.yaml");
+  EXPECT_FALSE(without.limits.any());
+  EXPECT_EQ(robot_model_to_yaml(without).find("limits:"), std::string::npos);
+
+  const RobotModel m = parse_robot_model(kSwpc + kSwpcLimits, "cart.yaml");
+  EXPECT_EQ(m.limits.linear_acceleration_mps2, 0.6);
+  EXPECT_EQ(m.limits.angular_acceleration_radps2, 2.0);
+  EXPECT_EQ(m.limits.steering_rate_radps, 6.0);
+  EXPECT_EQ(m.limits.linear_jerk_mps3, 5.0);
+  EXPECT_FALSE(m.limits.linear_velocity_mps.has_value());
+  EXPECT_FALSE(m.limits.angular_jerk_radps3.has_value());
+  expect_same(parse_robot_model(robot_model_to_yaml(m), "again.yaml"), m);
+}
+
+TEST(RobotModel, RejectsBadLimits) {
+  std::string text = kSwpc + kSwpcLimits;
+  text.replace(text.find("0.6"), 3, "0");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:14:3: limits.linear_acceleration_mps2: expected a positive number, got 0");
+  EXPECT_EQ(error_of(kSwpc + "limits: {max_speed: 1}\n"),
+            "robot.yaml:13:10: limits.max_speed: unknown key (known: linear_velocity_mps, "
+            "angular_velocity_radps, linear_acceleration_mps2, angular_acceleration_radps2, "
+            "linear_jerk_mps3, angular_jerk_radps3, steering_rate_radps)");
+  EXPECT_EQ(error_of(kDocent + "limits: {steering_rate_radps: 6}\n"),
+            "robot.yaml:12:10: limits.steering_rate_radps: applies to swpc robots only (this one "
+            "is differential)");
 }
 
 TEST(RobotModel, RejectsBrokenYamlWithLineAndColumn) {

@@ -4,6 +4,7 @@
 // robot_model_io.hpp so that maths libraries can use these types without yaml-cpp.
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,25 @@ struct SensorParams {
   MotionCaptureParams motion_capture;
 };
 
+/// What the robot's own motion controller enforces (DESIGN.md `limits:`). Read by the
+/// simulator, the model-gap replay and the daemon's command limiter; an absent limit is not
+/// applied. The first three keys are DESIGN.md's; the velocity and jerk limits are Swivel's.
+struct MotionLimits {
+  std::optional<double> linear_velocity_mps;          ///< body speed, per axis (x, y)
+  std::optional<double> angular_velocity_radps;
+  std::optional<double> linear_acceleration_mps2;     ///< body, per axis (x, y)
+  std::optional<double> angular_acceleration_radps2;
+  std::optional<double> linear_jerk_mps3;             ///< body, per axis (x, y)
+  std::optional<double> angular_jerk_radps3;
+  std::optional<double> steering_rate_radps;          ///< swpc: per module
+
+  [[nodiscard]] bool any() const {
+    return linear_velocity_mps || angular_velocity_radps || linear_acceleration_mps2 ||
+           angular_acceleration_radps2 || linear_jerk_mps3 || angular_jerk_radps3 ||
+           steering_rate_radps;
+  }
+};
+
 enum class DrivetrainKind { kDifferential, kSwpc };
 
 /// A named model extension and its parameters, e.g. gyro_bias: {bias_rad_s: 0.006}.
@@ -55,6 +75,7 @@ struct RobotModel {
   DifferentialParams differential;         ///< used when drivetrain is differential
   std::vector<SwpcModuleParams> modules;   ///< used when drivetrain is swpc
   SensorParams sensors;
+  MotionLimits limits;                     ///< absent keys: no limit
   std::map<std::string, EffectParams> effects;  ///< empty in a nominal model
   std::string source_file;                      ///< where it was read from, for messages
 

@@ -81,6 +81,30 @@ SensorParams read_sensors(ParamReader r) {
   return s;
 }
 
+// Every limit is optional and strictly positive; the section itself may be absent.
+MotionLimits read_limits(ParamReader r, DrivetrainKind drivetrain) {
+  MotionLimits l;
+  const auto limit = [&r](const char* key, std::optional<double>& out) {
+    const double value = r.number_or(key, 0.0);  // marks the key as known
+    if (!r.has(key)) return;
+    if (!(value > 0.0)) r.fail(key, "expected a positive number, got " + r.node()[key].Scalar());
+    out = value;
+  };
+  limit("linear_velocity_mps", l.linear_velocity_mps);
+  limit("angular_velocity_radps", l.angular_velocity_radps);
+  limit("linear_acceleration_mps2", l.linear_acceleration_mps2);
+  limit("angular_acceleration_radps2", l.angular_acceleration_radps2);
+  limit("linear_jerk_mps3", l.linear_jerk_mps3);
+  limit("angular_jerk_radps3", l.angular_jerk_radps3);
+  if (drivetrain == DrivetrainKind::kSwpc) {
+    limit("steering_rate_radps", l.steering_rate_radps);
+  } else if (r.has("steering_rate_radps")) {
+    r.fail("steering_rate_radps", "applies to swpc robots only (this one is differential)");
+  }
+  r.finish();
+  return l;
+}
+
 std::map<std::string, EffectParams> read_effects(ParamReader r) {
   std::map<std::string, EffectParams> effects;
   const YAML::Node& node = r.node();
@@ -192,6 +216,7 @@ RobotModel parse_robot_model(const std::string& yaml_text, const std::string& so
     model.modules = read_swpc(r.child("swpc"));
   }
   model.sensors = read_sensors(r.child("sensors"));
+  model.limits = read_limits(r.child("limits"), model.drivetrain);
   model.effects = read_effects(r.child("effects"));
   r.finish();
   return model;
@@ -234,6 +259,20 @@ std::string robot_model_to_yaml(const RobotModel& model) {
       << "  motion_capture: {position_noise_m: " << num(s.motion_capture.position_noise_m)
       << ", yaw_noise_rad: " << num(s.motion_capture.yaw_noise_rad)
       << ", rate_hz: " << num(s.motion_capture.rate_hz) << "}\n";
+  const MotionLimits& l = model.limits;
+  if (l.any()) {
+    out << "limits:\n";
+    const auto limit = [&out](const char* key, const std::optional<double>& value) {
+      if (value) out << "  " << key << ": " << num(*value) << "\n";
+    };
+    limit("linear_velocity_mps", l.linear_velocity_mps);
+    limit("angular_velocity_radps", l.angular_velocity_radps);
+    limit("linear_acceleration_mps2", l.linear_acceleration_mps2);
+    limit("angular_acceleration_radps2", l.angular_acceleration_radps2);
+    limit("linear_jerk_mps3", l.linear_jerk_mps3);
+    limit("angular_jerk_radps3", l.angular_jerk_radps3);
+    limit("steering_rate_radps", l.steering_rate_radps);
+  }
   if (model.effects.empty()) {
     out << "effects: {}\n";
   } else {
