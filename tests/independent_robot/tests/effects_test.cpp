@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "run_helpers.hpp"
+#include "run_fixtures.hpp"
 #include "swivel/independent/library_effects.hpp"
 #include "swivel/independent/outside_effects.hpp"
 #include "swivel/independent/simulation.hpp"

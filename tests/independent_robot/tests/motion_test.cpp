@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "run_helpers.hpp"
+#include "run_fixtures.hpp"
 #include "swivel/independent/simulation.hpp"
 
 namespace swivel::independent {

@@ -1,5 +1,5 @@
 #pragma once
-// Small helpers shared by the generator's tests.
+// Quiet runs, step tours and row lookups shared by the generator's tests.
 
 #include <vector>
 

@@ -1,4 +1,4 @@
-#include "run_helpers.hpp"
+#include "run_fixtures.hpp"
 
 #include <algorithm>
 #include <cmath>
