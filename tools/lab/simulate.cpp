@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "swivel/motion/twist_limiter.hpp"
 #include "swivel/robot_model_io.hpp"
 #include "swivel/run_log.hpp"
 #include "swivel/sim/effects.hpp"
@@ -91,7 +92,10 @@ int run_simulate(const SimulateOptions& o) {
           ? sim::calibration_steer_angles(plant, motion)
           : sim::aligned_steer_angles(plant, trajectory.at(std::min(duration_s, 1.0)));
   sim::World world(truth, options);
-  const sim::OpenLoopController controller(nominal);
+  // The robot's own controller: the nominal geometry (all it knows) and the robot's true
+  // limits (its firmware enforces them whatever the nominal model says).
+  const sim::OpenLoopController controller(nominal, truth.limits);
+  motion::TwistLimiter limiter(truth.limits);
 
   ActuatorCommand command;
   Twist2 calibration_twist;
@@ -126,7 +130,7 @@ int run_simulate(const SimulateOptions& o) {
       twist = calibration_twist;
     } else {
       twist = trajectory.at(t_s);
-      controller.velocity(twist, reading, command);
+      controller.velocity(limiter.step(twist, dt_s), reading, command);
     }
     writer.write(sim::make_run_log_sample(reading, twist));
     if (k == steps) break;

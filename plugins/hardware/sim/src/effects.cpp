@@ -85,6 +85,7 @@ std::vector<EffectInfo> effect_library(const RobotModel& model) {
     lib.push_back(caster);
     lib.push_back(steer);
   }
+
   lib.push_back({"slip",
                  "longitudinal slip growing with wheel acceleration: the contact rolls "
                  "r (psi_dot - gain |psi_dot| psi_ddot)",
@@ -93,6 +94,11 @@ std::vector<EffectInfo> effect_library(const RobotModel& model) {
   lib.push_back({"actuator_lag",
                  "wheel and steering rates follow their setpoints through a first-order lag",
                  {{"time_constant_s", 0.0, 0.0, kMaxLagS, "time constant, s"}}});
+  if (swpc) {
+    lib.push_back({"steering_lag",
+                   "the steering drives' rates follow their setpoints through a first-order lag",
+                   {{"time_constant_s", 0.0, 0.0, kMaxLagS, "time constant, s"}}});
+  }
   lib.push_back({"sensor_latency",
                  "encoders and gyro report the state of delay_s ago (motion capture does not)",
                  {{"delay_s", 0.0, 0.0, kMaxDelayS, "delay, s"}}});
@@ -208,6 +214,11 @@ PlantParams resolve_plant(const RobotModel& model) {
   if (const EffectParams* lag = effect("actuator_lag")) {
     p.actuator_time_constant_s = param_or(*lag, "time_constant_s", 0.0);
   }
+  p.steering_time_constant_s = p.actuator_time_constant_s;
+  if (const EffectParams* lag = effect("steering_lag")) {
+    p.steering_time_constant_s = param_or(*lag, "time_constant_s", 0.0);
+  }
+  p.limits = model.limits;
   if (const EffectParams* latency = effect("sensor_latency")) {
     p.sensor_delay_s = param_or(*latency, "delay_s", 0.0);
   }

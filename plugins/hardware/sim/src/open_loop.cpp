@@ -1,5 +1,6 @@
 #include "swivel/sim/open_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <stdexcept>
@@ -20,7 +21,11 @@ Twist2 rotation_about(double cx, double cy, double w) noexcept { return Twist2{w
 
 }  // namespace
 
-OpenLoopController::OpenLoopController(const RobotModel& nominal) : nominal_(nominal) {
+OpenLoopController::OpenLoopController(const RobotModel& nominal)
+    : OpenLoopController(nominal, nominal.limits) {}
+
+OpenLoopController::OpenLoopController(const RobotModel& nominal, const MotionLimits& limits)
+    : nominal_(nominal), max_steer_rate_radps_(limits.steering_rate_radps.value_or(0.0)) {
   if (nominal_.drivetrain == DrivetrainKind::kSwpc) {
     if (nominal_.modules.size() < 2 || nominal_.modules.size() > kMaxModules) {
       throw std::invalid_argument("nominal model '" + nominal_.name + "': expected 2.." +
@@ -59,7 +64,10 @@ void OpenLoopController::velocity(const Twist2& twist, const HardwareState& meas
     const double phi = measured.steer_angle_rad[i] + m.steering_offset_rad;
     const swpc::ModuleRates rates = swpc::inverse_module(m, phi, twist);
     out.wheel_rate_radps[i] = rates.wheel_rate_radps;
-    out.steer_rate_radps[i] = rates.steer_rate_radps;
+    out.steer_rate_radps[i] = max_steer_rate_radps_ > 0.0
+                                  ? std::clamp(rates.steer_rate_radps, -max_steer_rate_radps_,
+                                               max_steer_rate_radps_)
+                                  : rates.steer_rate_radps;
   }
 }
 

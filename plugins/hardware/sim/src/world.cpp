@@ -142,6 +142,8 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     const bool swpc = plant_.drivetrain == DrivetrainKind::kSwpc;
     const double tau = plant_.actuator_time_constant_s;
     const double follow = tau > 0.0 ? 1.0 - std::exp(-h / tau) : 1.0;
+    const double tau_steer = plant_.steering_time_constant_s;
+    const double follow_steer = tau_steer > 0.0 ? 1.0 - std::exp(-h / tau_steer) : 1.0;
     const NonSystematicErrors& ns = options_.nonsystematic;
     const double decay = std::exp(-h / ns.correlation_time_s);
     const double drive = std::sqrt(std::max(0.0, 1.0 - decay * decay));
@@ -160,7 +162,7 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       }
       m.wheel_rate_radps += follow * (command.wheel_rate_radps[i] - m.wheel_rate_radps);
       if (mode == ModuleDriveMode::kVelocity) {
-        m.steer_rate_radps += follow * (command.steer_rate_radps[i] - m.steer_rate_radps);
+        m.steer_rate_radps += follow_steer * (command.steer_rate_radps[i] - m.steer_rate_radps);
       }
       const double accel = (m.wheel_rate_radps - before) / h;
       double g = m.wheel_rate_radps -
@@ -172,8 +174,12 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       ground[i] = g;
     }
 
+    bool all_velocity = true;
+    for (std::size_t i = 0; i < n_; ++i) all_velocity = all_velocity && command.mode[i] == ModuleDriveMode::kVelocity;
     Twist2 t;
-    if (swpc) {
+    if (!options_.move_body && all_velocity) {
+      // Actuators only: the body stays where it is.
+    } else if (swpc) {
       t = swpc_twist(command, ground.data());
     } else {
       const differential::WheelRates rates{ground[0], ground[1]};
@@ -230,9 +236,11 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       }
     }
     for (std::size_t i = 0; i < n_; ++i) modules_[i].psi_rad += encoder_rate[i] * h;
-    const Pose2 delta = swpc::integrate_twist(t, h);
-    pose_ = compose(pose_, delta);
-    yaw_unwrapped_rad_ += delta.yaw_rad;
+    if (options_.move_body || !all_velocity) {
+      const Pose2 delta = swpc::integrate_twist(t, h);
+      pose_ = compose(pose_, delta);
+      yaw_unwrapped_rad_ += delta.yaw_rad;
+    }
     t_s_ += h;
     if (history_spacing_s_ > 0.0) record_history();
   }

@@ -79,7 +79,7 @@ TEST(EffectLibrary, ErrorsNameEffectAndParameter) {
   EXPECT_EQ(message_of([&] { validate_effects(swpc); }),
             "effects.track_width: not available for a swpc robot (available: gyro_bias, "
             "gyro_scale, wheel_radius, caster_offset, steering_offset, slip, actuator_lag, "
-            "sensor_latency)");
+            "steering_lag, sensor_latency)");
   RobotModel model = docent();
   model.effects["gyro_bias"]["bias"] = 0.1;
   EXPECT_EQ(message_of([&] { validate_effects(model); }),
@@ -218,6 +218,27 @@ TEST(Effects, ActuatorLagDelaysTheWheels) {
   // First-order response to a step: angle = w (T - tau (1 - exp(-T / tau))).
   EXPECT_NEAR(hw.wheel_angle_rad[0], 3.0 * (1.0 - 0.1 * (1.0 - std::exp(-10.0))), 2e-3);
   EXPECT_LT(hw.wheel_angle_rad[0], 3.0 - 0.25);
+}
+
+TEST(Effects, SteeringLagDelaysTheSteeringOnly) {
+  RobotModel model = swpc4();
+  model.effects["steering_lag"]["time_constant_s"] = 0.1;
+  SimOptions options = quiet();
+  World world(model, options);
+  ActuatorCommand c;
+  c.module_count = 4;
+  for (std::size_t i = 0; i < 4; ++i) {
+    c.wheel_rate_radps[i] = 2.0;
+    c.steer_rate_radps[i] = 1.0;
+  }
+  world.step(1.0, c);
+  // First-order response of the steering rate to a step; the wheels follow at once.
+  EXPECT_NEAR(world.true_steer_rad(0), 1.0 - 0.1 * (1.0 - std::exp(-10.0)), 2e-3);
+  EXPECT_NEAR(world.true_wheel_rad(0), 2.0, 1e-9);
+  EXPECT_EQ(resolve_plant(model).actuator_time_constant_s, 0.0);
+  model.effects["actuator_lag"]["time_constant_s"] = 0.05;
+  model.effects.erase("steering_lag");
+  EXPECT_EQ(resolve_plant(model).steering_time_constant_s, 0.05);  // follows the actuators
 }
 
 TEST(Effects, SensorLatencyDelaysEncodersAndGyroButNotMotionCapture) {

@@ -240,6 +240,36 @@ TEST(World, MotionCaptureCanBeSwitchedOff) {
   }
 }
 
+// With the body held still, the actuators (encoders, lags, latency) read exactly as with it
+// moving, in velocity mode.
+TEST(World, ActuatorsRunTheSameWithTheBodyHeldStill) {
+  RobotModel model = swpc4();
+  model.effects["actuator_lag"]["time_constant_s"] = 0.05;
+  model.effects["sensor_latency"]["delay_s"] = 0.02;
+  SimOptions moving = quiet(false);
+  SimOptions still = moving;
+  still.move_body = false;
+  World a(model, moving);
+  World b(model, still);
+  const OpenLoopController controller(model);
+  HardwareState ha;
+  HardwareState hb;
+  ActuatorCommand command;
+  for (int k = 0; k < 300; ++k) {
+    a.read(ha);
+    b.read(hb);
+    for (std::size_t i = 0; i < 4; ++i) {
+      ASSERT_EQ(ha.wheel_angle_rad[i], hb.wheel_angle_rad[i]) << k;
+      ASSERT_EQ(ha.steer_angle_rad[i], hb.steer_angle_rad[i]) << k;
+    }
+    controller.velocity(Twist2{0.3, 0.1 * std::sin(0.05 * k), 0.2}, ha, command);
+    a.step(0.01, command);
+    b.step(0.01, command);
+  }
+  EXPECT_GT(a.true_pose().x_m, 0.5);
+  EXPECT_EQ(b.true_pose().x_m, 0.0);
+}
+
 std::vector<double> record(std::uint64_t seed, bool nonsystematic) {
   RobotModel model = swpc4();
   SimOptions options;
@@ -305,6 +335,36 @@ TEST(World, InvalidEffectsAreRejectedAtConstruction) {
   RobotModel model = docent();
   model.effects["caster_offset"]["module_1_scale"] = 1.1;
   EXPECT_THROW(World(model, SimOptions{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace swivel::sim
+
+namespace swivel::sim {
+namespace {
+
+using test::swpc4;
+
+TEST(OpenLoop, SteeringRatesAreClampedToTheRobotsLimit) {
+  RobotModel model = swpc4();
+  HardwareState measured;
+  measured.module_count = 4;  // every caster at 0 rad: a sideways twist turns them fast
+  const Twist2 sideways{0.0, 0.5, 0.0};
+  ActuatorCommand free;
+  OpenLoopController(model).velocity(sideways, measured, free);
+  EXPECT_GT(std::abs(free.steer_rate_radps[0]), 20.0);
+  model.limits.steering_rate_radps = 6.0;
+  ActuatorCommand limited;
+  OpenLoopController(model).velocity(sideways, measured, limited);
+  MotionLimits other;
+  other.steering_rate_radps = 2.0;
+  ActuatorCommand slower;
+  OpenLoopController(model, other).velocity(sideways, measured, slower);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(std::abs(limited.steer_rate_radps[i]), std::min(6.0, std::abs(free.steer_rate_radps[i])));
+    EXPECT_EQ(std::abs(slower.steer_rate_radps[i]), std::min(2.0, std::abs(free.steer_rate_radps[i])));
+    EXPECT_EQ(limited.wheel_rate_radps[i], free.wheel_rate_radps[i]);
+  }
 }
 
 }  // namespace

@@ -20,8 +20,14 @@
 //                                                     speeds up, more while it slows down)
 //   actuator_lag    time_constant_s (0)               wheel and steering rates follow their
 //                                                     setpoints through a first-order lag
+//   steering_lag    time_constant_s (0)    swpc       the steering drives' own response: their
+//                                                     rates follow through this lag instead
 //   sensor_latency  delay_s (0)                       encoders and gyro report the state of
 //                                                     delay_s ago; motion capture does not
+//
+// The robot model's `limits:` belong to the robot's own motion controller, not to the world:
+// PlantParams carries them for whoever plays that controller (OpenLoopController and the
+// TwistLimiter of swivel::motion).
 //
 // Parameters left out of an effect take their identity value. Not real-time safe
 // (allocates); the world resolves effects once at construction.
@@ -78,8 +84,10 @@ struct PlantParams {
   std::array<SwpcModuleParams, kMaxModules> modules{};  ///< first module_count used (swpc)
   SensorParams sensors;                                 ///< gyro scale and bias included
   double slip_gain_per_radps2 = 0.0;
-  double actuator_time_constant_s = 0.0;
+  double actuator_time_constant_s = 0.0;   ///< wheels (and steering without steering_lag)
+  double steering_time_constant_s = 0.0;   ///< steering drives
   double sensor_delay_s = 0.0;
+  MotionLimits limits;                     ///< the model's `limits:`
 };
 
 /// Folds `model.effects` into the model's parameters.

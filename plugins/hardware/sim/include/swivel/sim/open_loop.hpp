@@ -28,12 +28,18 @@ struct CalibrationMotion {
 
 class OpenLoopController {
  public:
+  /// Uses the nominal model's geometry and its `limits:`.
   /// @throws std::invalid_argument for a model without valid geometry.
   explicit OpenLoopController(const RobotModel& nominal);
+  /// The nominal geometry with other limits (the robot's own, when they differ from what the
+  /// nominal model states).
+  OpenLoopController(const RobotModel& nominal, const MotionLimits& limits);
 
   /// Real-time safe. Setpoints for body twist `twist` given the current readings: wheel
   /// rates (differential; vy is ignored) or every module's wheel and steering rate at its
-  /// measured steering angle plus the nominal offset (swpc), all in kVelocity mode.
+  /// measured steering angle plus the nominal offset (swpc), all in kVelocity mode; steering
+  /// rates clamped to the steering rate limit. The twist's own limits (velocity,
+  /// acceleration, jerk) need state: the caller applies them with a motion::TwistLimiter.
   void velocity(const Twist2& twist, const HardwareState& measured,
                 ActuatorCommand& out) const noexcept;
 
@@ -49,6 +55,7 @@ class OpenLoopController {
 
  private:
   RobotModel nominal_;
+  double max_steer_rate_radps_ = 0.0;  // 0: no limit
 };
 
 /// True steering angles at which a world's casters start so that they already trail the

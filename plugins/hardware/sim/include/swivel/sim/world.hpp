@@ -26,6 +26,7 @@
 // processes, off by default. Same model, options and call sequence -> same output.
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <random>
@@ -58,6 +59,11 @@ struct SimOptions {
   bool quantize_encoders = true;
   bool motion_capture = true;
   NonSystematicErrors nonsystematic;
+  /// Whether the body moves. Off, only the actuators run (wheel and steering angles, drive
+  /// lags, sensor latency) and the pose and gyro stay still: all a replay of actuator
+  /// commands needs, at a fraction of the cost. Drive modes other than kVelocity need the
+  /// body's motion and move it whatever this says.
+  bool move_body = true;
   Pose2 start_pose;
   /// True steering angles at t = 0 (swpc), rad.
   std::array<double, kMaxModules> initial_steer_rad{};
@@ -85,6 +91,11 @@ class World {
   [[nodiscard]] const Twist2& true_twist() const noexcept { return twist_; }
   /// True steering angle of module i (swpc), unwrapped, rad.
   [[nodiscard]] double true_steer_rad(std::size_t i) const noexcept { return modules_[i].phi_rad; }
+  /// Real-time safe. Puts module i's caster at true steering angle `phi_rad` (its steering
+  /// rate and everything else unchanged): a replay that keeps to measured angles.
+  void set_true_steer_rad(std::size_t i, double phi_rad) noexcept {
+    if (i < n_ && std::isfinite(phi_rad)) modules_[i].phi_rad = phi_rad;
+  }
   /// True steering rate of module i over the last sub-step, rad/s.
   [[nodiscard]] double true_steer_rate_radps(std::size_t i) const noexcept {
     return modules_[i].steer_rate_radps;
