@@ -27,18 +27,23 @@ int run_gap(const GapCommandOptions& o) {
   const model_gap::RunData run = model_gap::load_run(o.run_file);
   const model_gap::GapResult result = model_gap::analyse_gap(nominal, run, o.gap);
   model_gap::write_report(result, o.out_dir);
-  std::cout << "verdict: " << model_gap::verdict_name(result.verdict) << "\n" << result.summary << "\n";
-  for (const auto& e : result.named) {
-    for (const auto& [key, value] : e.values) {
-      std::cout << "  " << e.name << "." << key << " = " << std::setprecision(6) << value
-                << " +- " << std::setprecision(2) << e.sigmas.at(key) << "\n";
+  for (const model_gap::QuestionResult* q : {&result.sensor, &result.command}) {
+    if (q == &result.command && !result.command_assessed) continue;
+    std::cout << model_gap::question_title(q->question) << ": " << model_gap::verdict_name(q->verdict)
+              << "\n  " << q->summary << "\n";
+    for (const auto& e : q->named) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i) {
+        std::cout << "    " << (e.limits ? "limits." : e.name + ".") << e.keys[i] << " = "
+                  << std::setprecision(6) << e.values[i] << " +- " << std::setprecision(2) << e.sigmas[i]
+                  << "\n";
+      }
     }
   }
   for (const auto& p : result.pose_gaps) {
-    std::cout << "  " << model_gap::question_name(p.question) << ": final position error "
-              << std::setprecision(4) << p.final_position_m_before << " m -> "
-              << p.final_position_m_after << " m, final heading error " << p.final_heading_rad_before
-              << " rad -> " << p.final_heading_rad_after << " rad\n";
+    std::cout << "  " << model_gap::question_title(p.question) << " replay: final position error "
+              << std::setprecision(4) << p.final_position_m_before << " m -> " << p.final_position_m_after
+              << " m, final heading error " << p.final_heading_rad_before << " rad -> "
+              << p.final_heading_rad_after << " rad\n";
   }
   std::cout << "report: " << o.out_dir << "/report.md (" << std::setprecision(3) << result.wall_time_s
             << " s)\n";
@@ -60,14 +65,15 @@ void add_gap_command(CLI::App& app, int& exit_code) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out_dir, "report directory (created)")->required();
-  cmd->add_option("--holdout", options->gap.holdout_fraction,
-                  "share of the run at its end kept for validation")
+  cmd->add_option("--window", options->gap.window_s, "length of the windows compared, s")
       ->capture_default_str()
-      ->check(CLI::Range(0.1, 0.5));
-  cmd->add_option("--min-explained", options->gap.min_explained,
-                  "share of the held-out residual above noise an effect must remove to be named")
+      ->check(CLI::Range(0.2, 10.0));
+  cmd->add_option("--min-sigma", options->gap.question.min_z_name,
+                  "significance (normal deviates) an effect needs to be named")
       ->capture_default_str()
-      ->check(CLI::Range(0.5, 1.0));
+      ->check(CLI::Range(2.0, 20.0));
+  cmd->add_flag("--sensor-only", options->gap.sensor_only,
+                "decide only the sensor-to-pose question (for runs whose commands were not logged)");
   cmd->callback([options, &exit_code] { exit_code = run_gap(*options); });
 }
 

@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
     const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     std::printf("%-7s 120 s @ 100 Hz, %zu candidates fitted: workflow %.2f s wall, %.2f s CPU "
                 "(analysis %.2f s wall), report in %s\n",
-                c.robot, result.candidates.size(), wall_s, cpu_s, result.wall_time_s, dir.c_str());
+                c.robot, result.sensor.candidates.size() + result.command.candidates.size(), wall_s, cpu_s,
+                result.wall_time_s, dir.c_str());
     std::printf("        verdict: %s\n", result.summary.c_str());
     if (cpu_s > 10.0) status = 1;
   }

@@ -4,46 +4,26 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace swivel::model_gap {
 namespace {
 
-struct Sums {
-  double rss_training = 0.0;
-  double rss_validation = 0.0;
-  std::size_t n_training = 0;
-  std::size_t n_validation = 0;
-};
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Eigenvalues of J'J below this share of the largest are directions the data do not fix.
+constexpr double kRankTolerance = 1e-9;
 
-Sums sums(const FitProblem& problem, const std::vector<double>& r) {
-  Sums s;
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    if (!std::isfinite(r[i])) continue;
-    if (problem.is_training[i]) {
-      s.rss_training += r[i] * r[i];
-      ++s.n_training;
-    } else {
-      s.rss_validation += r[i] * r[i];
-      ++s.n_validation;
-    }
-  }
-  return s;
-}
-
-// Training rows only; rows that are NaN for every parameter value (no motion capture) are
-// kept as zeros so that the residual vector keeps a fixed size. Forward differences with a
-// fixed step in z: the replay is smooth in its parameters, and a step tied to |z| would
-// collapse at z = 0, where every fit starts.
+// Every row; rows without data (NaN) count as zero so that the residual vector keeps a
+// fixed size. Forward differences with a fixed step in z: the replay is smooth in its
+// parameters, and a step tied to |z| would collapse at z = 0, where many fits start.
 class ReplayCost final : public ceres::CostFunction {
  public:
   ReplayCost(const FitProblem& problem, const std::vector<ParamSpec>& specs, double step)
       : problem_(problem), specs_(specs), step_(step), theta_(specs.size()), z_(specs.size()) {
-    for (std::size_t i = 0; i < problem.row_count; ++i) {
-      if (problem.is_training[i]) training_rows_.push_back(i);
-    }
-    set_num_residuals(static_cast<int>(training_rows_.size()));
+    set_num_residuals(static_cast<int>(problem.row_count));
     mutable_parameter_block_sizes()->push_back(static_cast<int>(specs.size()));
   }
 
@@ -53,7 +33,7 @@ class ReplayCost final : public ceres::CostFunction {
     for (std::size_t j = 0; j < p; ++j) z_[j] = parameters[0][j];
     if (!evaluate_at(residuals)) return false;
     if (jacobians == nullptr || jacobians[0] == nullptr) return true;
-    const std::size_t rows = training_rows_.size();
+    const std::size_t rows = problem_.row_count;
     shifted_.resize(rows);
     for (std::size_t j = 0; j < p; ++j) {
       // Step inwards when a bound is within reach.
@@ -71,14 +51,12 @@ class ReplayCost final : public ceres::CostFunction {
     return true;
   }
 
-  [[nodiscard]] std::size_t rows() const { return training_rows_.size(); }
-
  private:
   bool evaluate_at(double* out) const {
     for (std::size_t j = 0; j < specs_.size(); ++j) theta_[j] = z_[j] * specs_[j].scale;
     if (!problem_.residuals(theta_, buffer_)) return false;
-    for (std::size_t i = 0; i < training_rows_.size(); ++i) {
-      const double r = buffer_[training_rows_[i]];
+    for (std::size_t i = 0; i < problem_.row_count; ++i) {
+      const double r = buffer_[i];
       out[i] = std::isfinite(r) ? r : 0.0;
     }
     return true;
@@ -87,7 +65,6 @@ class ReplayCost final : public ceres::CostFunction {
   const FitProblem& problem_;
   const std::vector<ParamSpec>& specs_;
   double step_;
-  std::vector<std::size_t> training_rows_;
   mutable std::vector<double> theta_;
   mutable std::vector<double> z_;
   mutable std::vector<double> buffer_;
@@ -102,48 +79,239 @@ double bic(double rss, std::size_t n, std::size_t k) {
   return nn * std::log(std::max(rss, 1e-300) / nn) + static_cast<double>(k) * std::log(nn);
 }
 
-double autocorrelation_inflation(const FitProblem& problem, const std::vector<double>& r) {
-  double n = 0.0;
-  double n_eff = 0.0;
-  std::size_t i = 0;
-  while (i < r.size()) {
-    const std::size_t g = problem.row_group.empty() ? 0 : problem.row_group[i];
-    std::size_t j = i;
-    double num = 0.0;
-    double den = 0.0;
-    double count = 0.0;
-    double prev = std::numeric_limits<double>::quiet_NaN();
-    while (j < r.size() && (problem.row_group.empty() || problem.row_group[j] == g)) {
-      if (problem.is_training[j] && std::isfinite(r[j])) {
-        den += r[j] * r[j];
-        count += 1.0;
-        if (std::isfinite(prev)) num += prev * r[j];
-        prev = r[j];
-      }
-      ++j;
+namespace {
+
+// ln Q(a, x), the regularized upper incomplete gamma function: a series for P below a + 1,
+// a continued fraction (modified Lentz) for Q above, kept in logarithms so that the tail of a
+// strong signal does not underflow.
+double log_upper_gamma(double a, double x) {
+  if (x <= 0.0) return 0.0;
+  const double log_prefix = -x + a * std::log(x) - std::lgamma(a);
+  if (x < a + 1.0) {
+    double term = 1.0 / a;
+    double sum = term;
+    for (int n = 1; n < 500 && std::abs(term) > 1e-16 * std::abs(sum); ++n) {
+      term *= x / (a + n);
+      sum += term;
     }
-    if (count > 0.0) {
-      const double rho = den > 0.0 ? std::clamp(num / den, 0.0, 0.999) : 0.0;
-      n += count;
-      n_eff += count * (1.0 - rho) / (1.0 + rho);
-    }
-    i = j;
+    const double p = std::exp(log_prefix) * sum;
+    return std::log1p(-std::min(p, 1.0 - 1e-300));
   }
-  return n_eff > 0.0 ? std::sqrt(n / n_eff) : 1.0;
+  constexpr double kTiny = 1e-300;
+  double b = x + 1.0 - a;
+  double c = 1.0 / kTiny;
+  double d = 1.0 / b;
+  double h = d;
+  for (int i = 1; i < 500; ++i) {
+    const double an = -i * (i - a);
+    b += 2.0;
+    d = an * d + b;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    const double delta = d * c;
+    h *= delta;
+    if (std::abs(delta - 1.0) < 1e-15) break;
+  }
+  return log_prefix + std::log(h);
+}
+
+// ln erfc(y), with the asymptotic series where erfc underflows.
+double log_erfc(double y) {
+  if (y < 25.0) return std::log(std::erfc(y));
+  const double y2 = y * y;
+  return -y2 - std::log(y * std::sqrt(std::numbers::pi)) + std::log1p(-0.5 / y2 + 0.75 / (y2 * y2));
+}
+
+}  // namespace
+
+double chi_square_z(double chi2, double dof) {
+  if (!(dof > 0.0) || !(chi2 > 0.0)) return 0.0;
+  if (!std::isfinite(chi2)) return std::numeric_limits<double>::infinity();
+  const double log_p = log_upper_gamma(0.5 * dof, 0.5 * chi2);
+  // The |z| of a normal deviate with the same two-sided tail: erfc(z / sqrt 2) = p, by
+  // Newton's method on ln erfc from the first terms of its asymptotic inverse.
+  if (log_p >= 0.0) return 0.0;
+  double z = std::sqrt(std::max(0.0, -2.0 * log_p - std::log(std::max(-2.0 * log_p, 1.0))));
+  for (int i = 0; i < 50; ++i) {
+    const double y = z / std::sqrt(2.0);
+    const double f = log_erfc(y) - log_p;
+    // d/dz ln erfc(z / sqrt 2) = -sqrt(2 / pi) exp(-z^2 / 2) / erfc(z / sqrt 2)
+    const double slope = -std::sqrt(2.0 / std::numbers::pi) * std::exp(-0.5 * z * z - log_erfc(y));
+    const double step = f / slope;
+    z = std::max(0.0, z - step);
+    if (std::abs(step) < 1e-12) break;
+  }
+  return z;
+}
+
+double mahalanobis_squared(const std::vector<double>& difference, const std::vector<double>& covariance,
+                           std::size_t& rank) {
+  const auto p = static_cast<Eigen::Index>(difference.size());
+  rank = 0;
+  if (p == 0) return 0.0;
+  Eigen::MatrixXd c(p, p);
+  Eigen::VectorXd d(p);
+  for (Eigen::Index a = 0; a < p; ++a) {
+    d(a) = difference[static_cast<std::size_t>(a)];
+    for (Eigen::Index b = 0; b < p; ++b) c(a, b) = covariance[static_cast<std::size_t>(a * p + b)];
+  }
+  if (!c.allFinite() || !d.allFinite()) return kInf;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (c + c.transpose()));
+  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  double sum = 0.0;
+  for (Eigen::Index k = 0; k < p; ++k) {
+    const double lambda = eig.eigenvalues()(k);
+    if (!(lambda > kRankTolerance * top) || !(lambda > 0.0)) continue;
+    const double proj = eig.eigenvectors().col(k).dot(d);
+    sum += proj * proj / lambda;
+    ++rank;
+  }
+  return sum;
+}
+
+namespace {
+
+// Autocorrelation of one channel's residual series modelled as c phi^l for lags l >= 1 (a
+// white part and a first-order part): fitted log-linearly to the lags that stand out of the
+// estimate's own noise, none when lag one does not.
+struct Autocorrelation {
+  double c = 0.0;
+  double phi = 0.0;
+};
+
+Autocorrelation fit_autocorrelation(const std::vector<double>& series) {
+  constexpr std::size_t kLags = 5;
+  double s2 = 0.0;
+  double n = 0.0;
+  for (double v : series) {
+    if (!std::isfinite(v)) continue;
+    s2 += v * v;
+    n += 1.0;
+  }
+  Autocorrelation out;
+  if (n < 20.0 || s2 <= 0.0) return out;
+  s2 /= n;
+  std::array<double, kLags + 1> rho{};
+  for (std::size_t l = 1; l <= kLags; ++l) {
+    double s = 0.0;
+    for (std::size_t i = l; i < series.size(); ++i) {
+      if (std::isfinite(series[i]) && std::isfinite(series[i - l])) s += series[i] * series[i - l];
+    }
+    rho[l] = s / (n * s2);
+  }
+  const double noise = 1.0 / std::sqrt(n);
+  if (!(rho[1] > 2.0 * noise)) return out;
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, m = 0.0;
+  for (std::size_t l = 1; l <= kLags && rho[l] > noise; ++l) {
+    const double x = static_cast<double>(l);
+    sx += x;
+    sy += std::log(rho[l]);
+    sxx += x * x;
+    sxy += x * std::log(rho[l]);
+    m += 1.0;
+  }
+  out.phi = m >= 2.0 ? std::exp((m * sxy - sx * sy) / (m * sxx - sx * sx)) : rho[1];
+  out.phi = std::clamp(out.phi, 0.0, 0.97);
+  out.c = out.phi > 0.0 ? std::clamp(rho[1] / out.phi, 0.0, 1.0) : 0.0;
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
+                                        const std::vector<double>& r,
+                                        const std::vector<std::size_t>& row_window,
+                                        const std::vector<std::size_t>& row_group,
+                                        std::size_t window_count, std::vector<char>& observable) {
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
+  Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
+  std::size_t groups = 0;
+  for (std::size_t g : row_group) groups = std::max(groups, g + 1);
+  // Per group: its rows by window (npos where it has none).
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::vector<std::vector<std::size_t>> rows_of(groups, std::vector<std::size_t>(window_count, kNone));
+  std::vector<char> used(window_count, 0);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    if (!std::isfinite(r[i])) continue;
+    const Eigen::Map<const Eigen::VectorXd> row(jacobian.data() + i * p, pp);
+    bread.noalias() += row * row.transpose();
+    scores.col(static_cast<Eigen::Index>(row_window[i])) += row * r[i];
+    used[row_window[i]] = 1;
+    rows_of[row_group[i]][row_window[i]] = i;
+  }
+  Eigen::MatrixXd omega = scores * scores.transpose();
+  for (std::size_t g = 0; g < groups; ++g) {
+    std::vector<double> series(window_count, std::numeric_limits<double>::quiet_NaN());
+    double s2 = 0.0;
+    double n = 0.0;
+    for (std::size_t j = 0; j < window_count; ++j) {
+      if (rows_of[g][j] == kNone) continue;
+      series[j] = r[rows_of[g][j]];
+      s2 += series[j] * series[j];
+      n += 1.0;
+    }
+    const Autocorrelation ac = fit_autocorrelation(series);
+    if (ac.c <= 0.0 || n == 0.0) continue;
+    s2 /= n;
+    double weight = ac.c * ac.phi;
+    for (std::size_t l = 1; l < window_count && weight > 1e-4; ++l, weight *= ac.phi) {
+      Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(pp, pp);
+      for (std::size_t j = l; j < window_count; ++j) {
+        const std::size_t a = rows_of[g][j];
+        const std::size_t b = rows_of[g][j - l];
+        if (a == kNone || b == kNone) continue;
+        const Eigen::Map<const Eigen::VectorXd> ja(jacobian.data() + a * p, pp);
+        const Eigen::Map<const Eigen::VectorXd> jb(jacobian.data() + b * p, pp);
+        cross.noalias() += ja * jb.transpose();
+      }
+      omega += weight * s2 * (cross + cross.transpose());
+    }
+  }
+  const double windows = static_cast<double>(std::count(used.begin(), used.end(), 1));
+  if (windows > static_cast<double>(p) + 1.0) omega *= windows / (windows - static_cast<double>(p));
+
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(bread);
+  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(pp, pp);
+  Eigen::MatrixXd null_space = Eigen::MatrixXd::Zero(pp, pp);
+  for (Eigen::Index k = 0; k < pp; ++k) {
+    const Eigen::VectorXd v = eig.eigenvectors().col(k);
+    const double lambda = eig.eigenvalues()(k);
+    if (lambda > kRankTolerance * top && lambda > 0.0) {
+      inverse += v * v.transpose() / lambda;
+    } else {
+      null_space += v * v.transpose();
+    }
+  }
+  const Eigen::MatrixXd cov = inverse * omega * inverse;
+  observable.assign(p, 1);
+  std::vector<double> out(p * p);
+  for (Eigen::Index a = 0; a < pp; ++a) {
+    // A parameter with a sizeable part in a direction the data do not fix is not observable
+    // on its own (e.g. one radius of a diagonal pattern on a four-caster robot).
+    if (null_space(a, a) > 0.01) observable[static_cast<std::size_t>(a)] = 0;
+    for (Eigen::Index b = 0; b < pp; ++b) out[static_cast<std::size_t>(a * pp + b)] = cov(a, b);
+  }
+  return out;
 }
 
 FitOutcome score(const FitProblem& problem, std::span<const double> theta) {
   FitOutcome out;
   out.values.assign(theta.begin(), theta.end());
-  out.sigmas.assign(theta.size(), 0.0);
+  out.sigmas.assign(theta.size(), kInf);
+  out.naive_sigmas.assign(theta.size(), kInf);
+  out.observable.assign(theta.size(), 0);
   if (!problem.residuals(theta, out.residuals)) return out;
-  const Sums s = sums(problem, out.residuals);
+  for (double v : out.residuals) {
+    if (!std::isfinite(v)) continue;
+    out.rss += v * v;
+    ++out.n;
+  }
   out.ok = true;
-  out.rss_training = s.rss_training;
-  out.rss_validation = s.rss_validation;
-  out.n_training = s.n_training;
-  out.n_validation = s.n_validation;
-  out.bic = bic(s.rss_training, s.n_training, theta.size());
+  out.bic = bic(out.rss, out.n, theta.size());
   return out;
 }
 
@@ -178,32 +346,44 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   out.iterations = static_cast<int>(summary.iterations.size());
   if (!out.ok) return out;
 
-  // Covariance from the Jacobian at the optimum: s^2 (J^T J)^-1 in z units.
+  // Jacobian at the optimum (z units), then the sandwich covariance in value units.
   ceres::CRSMatrix jac;
   ceres::Problem::EvaluateOptions eval;
   if (!solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac)) return out;
-  Eigen::MatrixXd j_dense = Eigen::MatrixXd::Zero(jac.num_rows, jac.num_cols);
+  std::vector<double> dense(static_cast<std::size_t>(jac.num_rows) * p, 0.0);
   for (int r = 0; r < jac.num_rows; ++r) {
     for (int k = jac.rows[static_cast<std::size_t>(r)]; k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
-      j_dense(r, jac.cols[static_cast<std::size_t>(k)]) = jac.values[static_cast<std::size_t>(k)];
+      dense[static_cast<std::size_t>(r) * p + static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
+          jac.values[static_cast<std::size_t>(k)];
     }
   }
-  const Eigen::MatrixXd info = j_dense.transpose() * j_dense;
-  const double dof = std::max<double>(1.0, static_cast<double>(out.n_training) - static_cast<double>(p));
-  const double s2 = out.rss_training / dof;
-  const double inflation = autocorrelation_inflation(problem, out.residuals);
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(info);
-  const bool full_rank = cod.rank() == static_cast<Eigen::Index>(p);
-  const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
-  out.covariance.assign(p * p, std::numeric_limits<double>::infinity());
-  for (std::size_t j = 0; j < p; ++j) {
-    const auto jj = static_cast<Eigen::Index>(j);
-    out.sigmas[j] = full_rank ? std::sqrt(std::max(cov(jj, jj), 0.0)) * specs[j].scale * inflation
-                              : std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < p && full_rank; ++i) {
-      out.covariance[j * p + i] = cov(jj, static_cast<Eigen::Index>(i)) * specs[j].scale *
-                                  specs[i].scale * inflation * inflation;
+  std::vector<std::size_t> groups = problem.row_group;
+  if (groups.empty()) groups.assign(problem.row_count, 0);
+  const std::vector<double> cov_z = sandwich_covariance(dense, p, out.residuals, problem.row_window,
+                                                        groups, problem.window_count, out.observable);
+  // The same, as if the rows were independent.
+  {
+    const auto pp = static_cast<Eigen::Index>(p);
+    Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
+    for (std::size_t i = 0; i < out.residuals.size(); ++i) {
+      if (!std::isfinite(out.residuals[i])) continue;
+      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + i * p, pp);
+      bread.noalias() += row * row.transpose();
     }
+    const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
+    const Eigen::MatrixXd naive = bread.completeOrthogonalDecomposition().pseudoInverse() * (out.rss / dof);
+    out.naive_sigmas.resize(p);
+    for (std::size_t a = 0; a < p; ++a) {
+      const auto aa = static_cast<Eigen::Index>(a);
+      out.naive_sigmas[a] = std::sqrt(std::max(naive(aa, aa), 0.0)) * specs[a].scale;
+    }
+  }
+  out.covariance.assign(p * p, 0.0);
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t b = 0; b < p; ++b) {
+      out.covariance[a * p + b] = cov_z[a * p + b] * specs[a].scale * specs[b].scale;
+    }
+    out.sigmas[a] = out.observable[a] ? std::sqrt(std::max(out.covariance[a * p + a], 0.0)) : kInf;
   }
   return out;
 }

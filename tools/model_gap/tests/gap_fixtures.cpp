@@ -62,18 +62,28 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
   log.header = run_log_header(nominal);
   const auto rows = static_cast<std::size_t>(std::llround(duration_s * rate_hz)) + 1;
   const double dt = 1.0 / rate_hz;
-  const sim::OpenLoopController controller(nominal);
+  // The robot's controller runs at 1 kHz on the continuously changing command, as a real
+  // drive does; rows sample it (DESIGN.md "Run logs").
+  const auto control_steps = static_cast<int>(std::max(1.0, std::round(dt / 0.001)));
+  const double h = dt / control_steps;
+  const sim::OpenLoopController controller(nominal, truth.limits);
+  const sim::PlantParams plant = sim::resolve_plant(truth);
   HardwareState hw;
+  HardwareState measured;
+  measured.module_count = static_cast<std::uint32_t>(nominal.module_count());
   ActuatorCommand command;
   for (std::size_t k = 0; k < rows; ++k) {
     const double t = static_cast<double>(k) * dt;
     world.read(hw);
     hw.stamp_s = t;
-    const Twist2 twist = pattern_command(t, swpc);
-    log.samples.push_back(sim::make_run_log_sample(hw, twist));
-    controller.velocity(twist, hw, command);
-    if (k + 1 < rows && world.step(dt, command) != Status::kOk) {
-      throw std::runtime_error(world.last_error());
+    log.samples.push_back(sim::make_run_log_sample(hw, pattern_command(t, swpc)));
+    if (k + 1 == rows) break;
+    for (int s = 0; s < control_steps; ++s) {
+      for (std::size_t i = 0; i < nominal.module_count(); ++i) {
+        measured.steer_angle_rad[i] = world.true_steer_rad(i) - plant.modules[i].steering_offset_rad;
+      }
+      controller.velocity(pattern_command(t + s * h, swpc), measured, command);
+      if (world.step(h, command) != Status::kOk) throw std::runtime_error(world.last_error());
     }
   }
   return log;

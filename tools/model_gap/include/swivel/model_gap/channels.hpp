@@ -1,6 +1,8 @@
 #pragma once
-// Measured and predicted channels of a run on one common time base. Plain data: the
-// replay fills the predictions, the locating and fitting code reads residuals from them.
+// The two questions the workflow answers and the channels that answer them. A channel is
+// compared window by window (windows.hpp): the change of a measured quantity over a window
+// against the change its replay predicts, so that noise integrated from the start of the
+// run (dead reckoning, random wheel slip) does not pile up in the comparison.
 
 #include <cstddef>
 #include <string>
@@ -8,49 +10,36 @@
 
 namespace swivel::model_gap {
 
-/// Which question a channel answers (DESIGN.md "Model-gap workflow").
+/// Which question a channel answers (DESIGN.md "Model-gap workflow"). The two are decided
+/// separately: a disagreement in one never vetoes a finding in the other.
 enum class Question {
-  kSensorToPose,     ///< dead reckoning from encoders and gyro, compared with motion capture
-  kCommandToSensor,  ///< commands re-simulated, compared with encoders, steering and gyro
-  kCommandToPose,    ///< commands re-simulated, compared with motion capture
+  /// Geometry and sensors: the measured encoders, steering angles and gyro, dead-reckoned,
+  /// against motion capture. Independent of how the robot responded to its commands.
+  kSensorToPose,
+  /// Actuators and the robot's own controller: the logged commands replayed through the
+  /// simulator against the measured encoders, steering, gyro and motion capture.
+  kCommandToMotion,
 };
 
-/// Name used in reports: "sensor_to_pose", "command_to_sensor", "command_to_pose".
+/// "sensor_to_pose", "command_to_motion" (report keys).
 const char* question_name(Question q);
+/// "sensor to pose", "command to motion" (report text).
+const char* question_title(Question q);
 
-/// What a channel measures; decides the regressors that describe its residual.
+/// What a channel measures over a window; decides its noise and misfit regressors.
 enum class ChannelKind {
-  kPosition,     ///< world-frame coordinate, m
-  kHeading,      ///< world-frame yaw, rad (residual wrapped to (-pi, pi])
-  kWheelAngle,   ///< cumulative wheel angle, rad
-  kSteerAngle,   ///< measured steering angle, rad (residual wrapped)
-  kYawRate,      ///< gyro, rad/s
+  kPosition,    ///< displacement along a robot axis at the window's start, m
+  kHeading,     ///< heading change, rad
+  kWheelAngle,  ///< wheel rotation, rad
+  kSteerAngle,  ///< steering rotation, rad
 };
 
 struct ChannelInfo {
-  std::string name;  ///< e.g. "dead_reckoning.x_m", "simulation.wheel_l_rad"
-  std::string unit;  ///< "m", "rad", "rad/s"
-  Question question = Question::kCommandToSensor;
-  ChannelKind kind = ChannelKind::kWheelAngle;
+  std::string name;  ///< e.g. "dead_reckoning.dx_m", "replay.wheel_l_rad"
+  std::string unit;  ///< "m", "rad"
+  Question question = Question::kSensorToPose;
+  ChannelKind kind = ChannelKind::kPosition;
+  std::size_t module = 0;  ///< wheel or steering channels: the module (0-based)
 };
-
-/// Samples of several channels; values[c][k] is channel c at sample k (NaN where absent,
-/// e.g. no motion-capture sample).
-struct ChannelSet {
-  std::vector<ChannelInfo> info;
-  std::vector<std::vector<double>> values;
-
-  [[nodiscard]] std::size_t channel_count() const { return info.size(); }
-  /// Index of the channel named `name`, or channel_count() when there is none.
-  [[nodiscard]] std::size_t find(const std::string& name) const;
-};
-
-/// measured - predicted for one channel and sample; angles wrapped, NaN when either is.
-double residual_at(const ChannelInfo& info, double measured, double predicted);
-
-/// Residual of every channel: measured - predicted (same shape as the inputs).
-/// @throws std::invalid_argument when the two sets do not have the same channels and length.
-std::vector<std::vector<double>> residuals(const ChannelSet& measured,
-                                           const ChannelSet& predicted);
 
 }  // namespace swivel::model_gap

@@ -1,8 +1,14 @@
 #pragma once
-// Non-linear least squares over a handful of effect parameters (Ceres), with parameter
-// uncertainty from the Jacobian at the optimum and the Bayesian information criterion.
-// The residual function replays the whole run; rows are split into a training part (used
-// by the fit) and a held-out validation part (only scored).
+// Non-linear least squares over a handful of effect parameters (Ceres), with a parameter
+// covariance that stays honest when residuals are correlated in time: the sandwich
+// (J'J)^-1 Omega (J'J)^-1. Slowly wandering noise, such as a wheel's random slip, makes
+// neighbouring windows agree; an estimate that assumed them independent would be too sure
+// of itself. Omega takes the windows' own scores at lag 0 (any correlation between channels
+// of one window included) and, at longer lags, each channel's autocorrelation modelled as
+// c phi^l (white noise plus a first-order process), fitted to its residuals. A kernel
+// estimate on the scores alone (Newey-West) was tried and is far too sure of itself here: the
+// effects' regressors are smooth over the run, and the scores of fitted residuals sum to
+// zero.
 
 #include <cstddef>
 #include <functional>
@@ -22,36 +28,39 @@ struct ParamSpec {
   double upper = 1e300;
 };
 
-/// Whitened residuals of the whole run for parameter values `theta` (same order as the
-/// specs). Returns false when the replay cannot be evaluated for these values.
+/// Whitened residual rows for parameter values `theta` (same order as the specs); NaN for a
+/// row without data. Returns false when the replay cannot be evaluated for these values.
 using ResidualFunction = std::function<bool(std::span<const double> theta, std::vector<double>& r)>;
 
 struct FitProblem {
   ResidualFunction residuals;
   std::size_t row_count = 0;
-  std::vector<char> is_training;      ///< per row: 1 = fitted, 0 = held out
-  std::vector<std::size_t> row_group; ///< per row: channel index, rows of a group consecutive
+  std::vector<std::size_t> row_window;  ///< per row: its window (time order), for Omega
+  std::vector<std::size_t> row_group;   ///< per row: its channel (one time series per group)
+  std::size_t window_count = 0;
 };
 
 struct FitOptions {
-  int max_iterations = 15;
+  int max_iterations = 20;
   double step = 1e-3;  ///< forward-difference step in z units (value / scale)
-  double function_tolerance = 1e-5;
-  double parameter_tolerance = 1e-6;
+  double function_tolerance = 1e-6;
+  double parameter_tolerance = 1e-7;
 };
 
 struct FitOutcome {
-  bool ok = false;                ///< the solver ran and the optimum could be evaluated
+  bool ok = false;                  ///< the solver ran and the optimum could be evaluated
   std::vector<double> values;
-  std::vector<double> sigmas;     ///< 1-sigma, inflated for autocorrelated residuals
-  std::vector<double> covariance; ///< p x p row-major, same units and inflation as sigmas
-  double rss_training = 0.0;
-  double rss_validation = 0.0;
-  std::size_t n_training = 0;
-  std::size_t n_validation = 0;
+  std::vector<double> sigmas;       ///< 1-sigma; infinite for a parameter the data cannot fix
+  /// 1-sigma as if the rows were independent, s^2 (J'J)^-1: sigmas / naive_sigmas is how
+  /// much the residuals' correlation widens each parameter's uncertainty.
+  std::vector<double> naive_sigmas;
+  std::vector<double> covariance;   ///< p x p row-major, observable subspace only
+  std::vector<char> observable;     ///< per parameter
+  double rss = 0.0;
+  std::size_t n = 0;                ///< rows with data
   double bic = 0.0;
   int iterations = 0;
-  std::vector<double> residuals;  ///< all rows at the optimum
+  std::vector<double> residuals;    ///< every row at the optimum
 };
 
 /// n ln(rss / n) + k ln(n): Gaussian residuals of unknown common variance.
@@ -60,12 +69,29 @@ double bic(double rss, std::size_t n, std::size_t k);
 /// Scores fixed parameter values (no fitting): rss, bic with k = theta.size().
 FitOutcome score(const FitProblem& problem, std::span<const double> theta);
 
-/// Fits `specs` by Levenberg-Marquardt on the training rows.
+/// Fits `specs` by Levenberg-Marquardt.
 FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                const FitOptions& options = {});
 
-/// sqrt(n / n_eff) for the training rows of `r`: how much the lag-one autocorrelation of
-/// each group's residuals inflates a standard error computed as if they were independent.
-double autocorrelation_inflation(const FitProblem& problem, const std::vector<double>& r);
+/// Sandwich covariance of least-squares coefficients: `jacobian` (rows x p, row-major) of the
+/// whitened residuals `r` with respect to the coefficients; rows belong to time windows
+/// (`row_window`) and to channels (`row_group`, one time series each). Rows with a non-finite
+/// residual are skipped. Returns p x p row-major on the observable subspace; `observable`
+/// flags the parameters the rows determine.
+std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
+                                        const std::vector<double>& r,
+                                        const std::vector<std::size_t>& row_window,
+                                        const std::vector<std::size_t>& row_group,
+                                        std::size_t window_count, std::vector<char>& observable);
+
+/// Significance of a chi-square statistic with `dof` degrees of freedom as the equivalent
+/// normal deviate (Wilson-Hilferty): about 1 for a statistic at its mean, 5 for a one-in-
+/// three-million event.
+double chi_square_z(double chi2, double dof);
+
+/// d' C^+ d over the observable subspace of the covariance C (p x p row-major), and its
+/// rank; d = values - reference.
+double mahalanobis_squared(const std::vector<double>& difference, const std::vector<double>& covariance,
+                           std::size_t& rank);
 
 }  // namespace swivel::model_gap

@@ -1,0 +1,87 @@
+#pragma once
+// The command-to-motion replay: the logged commands driven through the robot's controller
+// (the nominal geometry it knows, the limits of the model under test) into the simulator's
+// world (the model's actuators and effects, noise off), compared window by window with the
+// measured wheel and steering encoders.
+//
+// The question is how the robot's actuators answered its commands; how the encoders' motion
+// moved the robot is the sensor-to-pose question's. So the replayed body does not move
+// (SimOptions::move_body), which makes this replay cheap enough to fit. The whole robot is
+// replayed only for the report's path (path()).
+//
+// Logged commands are samples of a signal that may change between rows (a drive ramps at
+// its own rate): the replay interpolates them linearly (first-order hold) at every
+// integration sub-step, and takes them `command_delay_s` late, a timing nuisance fitted from
+// the data beside the effects.
+//
+// A caster steers itself towards trailing its motion: the steering law phi_dot =
+// (n . v_s) / d - w pulls a trailing caster back at |v_s| / d (25 /s at 0.5 m/s on a 2 cm
+// offset) and pushes a leading one away as fast. Where a caster leads (swinging through a
+// reversal), which way and how fast it turns hangs on its angle to within less than the
+// encoder count the log resolves, so such windows are not compared. Elsewhere the replayed
+// caster runs free, and one that parts from its measured angle by more than a few counts is
+// put back on it at the next row; steering is compared row by row, a window's steering
+// residual being the sum of its rows' prediction errors.
+//
+// Channels, per window: replay.wheel_<l|r|i>_rad (wheel rotation), replay.steer_<i>_rad
+// (steering rotation, swpc).
+
+#include <vector>
+
+#include "swivel/model_gap/channels.hpp"
+#include "swivel/model_gap/run_data.hpp"
+#include "swivel/model_gap/sensor_replay.hpp"
+#include "swivel/model_gap/windows.hpp"
+#include "swivel/robot_model.hpp"
+
+namespace swivel::model_gap {
+
+class CommandReplay {
+ public:
+  /// Largest command delay a fit may try, either way, as a multiple of the row period.
+  static constexpr double kMaxCommandDelayRows = 1.5;
+
+  /// Uses the windows and motion-capture anchors of `sensors` (same run), and its nominal
+  /// dead-reckoned path `path` (one pose per row) for the casters' motion.
+  CommandReplay(const RobotModel& nominal, const RunData& run, const SensorReplay& sensors,
+                const std::vector<Pose2>& path);
+
+  /// Per window: false where a caster swung through a reversal (not compared).
+  [[nodiscard]] const std::vector<char>& compared() const { return compared_; }
+
+  [[nodiscard]] const std::vector<ChannelInfo>& channels() const { return channels_; }
+  [[nodiscard]] std::size_t window_count() const { return windows_->size(); }
+  /// The run's mean row period, s.
+  [[nodiscard]] double row_period_s() const { return row_period_s_; }
+
+  /// Measured minus predicted change of every channel over every window (channel-major),
+  /// for the robot `model` with commands taken `command_delay_s` late. False when the
+  /// simulation fails.
+  bool residuals(const RobotModel& model, double command_delay_s, std::vector<double>& out,
+                 std::size_t window_limit = static_cast<std::size_t>(-1)) const;
+
+  /// The replayed robot's true pose at every row, from the run's start pose.
+  void path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const;
+
+ private:
+  struct Track {
+    std::vector<Pose2> pose;  // unwrapped heading (with the body moving)
+    std::vector<std::vector<double>> wheel;
+    std::vector<std::vector<double>> steer;  // per row: predicted turn in the row
+  };
+  bool simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
+                bool move_body, Track& track) const;
+
+  RobotModel nominal_;
+  const RunData* run_ = nullptr;
+  const SensorReplay* sensors_ = nullptr;
+  const std::vector<Window>* windows_ = nullptr;
+  bool swpc_ = false;
+  std::size_t modules_ = 2;
+  double row_period_s_ = 0.01;
+  std::vector<char> compared_;
+  std::vector<ChannelInfo> channels_;
+  mutable Track track_;
+};
+
+}  // namespace swivel::model_gap

@@ -1,0 +1,130 @@
+#pragma once
+// One question of the workflow, decided on its own: fit the question's candidates to its
+// window residuals, select effects by forward steps (the best single effect, then a second
+// one only if it is significant in the pair), and give a verdict:
+//   no significant gap    no candidate is significant and no misfit test fires;
+//   named                 the selected effects are significant and large enough to matter
+//                         (they move some channel by half its noise, RMS) and, with them
+//                         added, every misfit test stays quiet;
+//   unexplained residual  a misfit test fires: something the library does not hold
+//                         remains, and nothing is named (a library effect that fits part
+//                         of it would be a wrong name).
+// Significance is a Wald test against the nominal model's own values with the
+// autocorrelation-robust covariance of fit.hpp, expressed as a normal deviate.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "swivel/model_gap/channels.hpp"
+#include "swivel/model_gap/fit.hpp"
+#include "swivel/model_gap/library.hpp"
+#include "swivel/model_gap/misfit.hpp"
+#include "swivel/model_gap/noise_model.hpp"
+#include "swivel/robot_model.hpp"
+
+namespace swivel::model_gap {
+
+enum class Verdict { kNoSignificantGap, kNamed, kUnexplained };
+
+/// "no significant gap", "named", "unexplained residual".
+const char* verdict_name(Verdict v);
+
+struct QuestionOptions {
+  double min_z_name = 5.0;    ///< significance an effect needs to be named
+  double min_z_misfit = 5.0;  ///< significance at which a misfit test calls the residual unexplained
+  /// Size (noise sigmas, the largest over channels of the RMS change) below which a
+  /// significant effect or misfit is still too small to matter.
+  double min_effect_size = 0.5;
+  /// Size a significant misfit must reach to make the residual unexplained (MisfitTest::size:
+  /// the pattern at least as large as the noise around it): a replay is an approximation,
+  /// and what it misses by a fraction of the noise is not a missing effect.
+  double min_misfit_size = 1.0;
+  std::size_t max_effects = 2;
+  std::size_t pair_pool = 3;  ///< best single candidates tried as the second effect
+  /// Screening of long runs: every candidate is first fitted on the first screen_fraction of
+  /// the windows (at least screen_min_windows), and the refit_count best again on all.
+  double screen_fraction = 0.35;
+  std::size_t screen_min_windows = 40;
+  std::size_t refit_count = 2;
+  FitOptions fit;
+};
+
+/// How a question's channels are predicted: the replay behind it.
+struct QuestionReplay {
+  std::vector<ChannelInfo> channels;
+  std::size_t windows = 0;
+  /// Residuals (channel-major, channel units) of `model` with nuisance values `nuisance`,
+  /// for the first `window_limit` windows (the rest NaN).
+  std::function<bool(const RobotModel& model, std::span<const double> nuisance, std::vector<double>& out,
+                     std::size_t window_limit)>
+      residuals;
+  /// Fitted with every candidate and never named (e.g. the commands' timing).
+  std::vector<ParamSpec> nuisance;
+  std::vector<double> own_change;               ///< channel-major, for the misfit tests
+  std::vector<std::vector<double>> noise_x;     ///< [channel][window], NoiseModel's x
+  std::vector<double> noise_floor;              ///< per channel, variance
+  std::vector<double> accel;                    ///< per window
+  std::vector<double> start_yaw_rad;            ///< per window
+  std::vector<std::vector<double>> wheel_sin_change;
+  std::vector<std::vector<double>> wheel_cos_change;
+};
+
+/// Parameters of one named effect as fitted, in the model's units.
+struct FittedEffect {
+  std::string name;
+  bool limits = false;  ///< written to the model's `limits:` (else to `effects:`)
+  std::vector<std::string> keys;
+  std::vector<double> values;
+  std::vector<double> sigmas;     ///< one standard deviation (infinite: not observable alone)
+  double z = 0.0;                 ///< significance against the nominal model's values
+};
+
+/// One candidate (a single effect or a pair) after fitting.
+struct CandidateScore {
+  std::vector<std::string> effects;
+  bool ok = false;
+  std::vector<std::string> param_names;  ///< "effect.key"
+  std::vector<double> values;            ///< model units
+  std::vector<double> sigmas;
+  std::vector<double> z;                 ///< per effect: significance
+  std::vector<double> size;              ///< per effect: RMS change it brings, noise sigmas
+  double bic = 0.0;
+  double delta_bic = 0.0;                ///< against the nominal model (negative is better)
+  double explained = 0.0;                ///< share of the nominal whitened sum of squares removed
+  int iterations = 0;
+  std::string label_note;                ///< e.g. how far it was fitted
+  [[nodiscard]] std::string label() const;
+};
+
+/// The gap of one channel before and after.
+struct ChannelGap {
+  ChannelInfo info;
+  double noise_sigma = 0.0;   ///< median over windows, channel units
+  double rms_before = 0.0;    ///< window residuals, channel units
+  double rms_after = 0.0;
+  double whitened_rms_before = 0.0;
+  double whitened_rms_after = 0.0;
+};
+
+struct QuestionResult {
+  Question question = Question::kSensorToPose;
+  Verdict verdict = Verdict::kNoSignificantGap;
+  std::string summary;
+  std::vector<FittedEffect> named;
+  std::vector<CandidateScore> candidates;  ///< best BIC first
+  std::vector<MisfitTest> misfits;         ///< on the residual that remains, most significant first
+  std::vector<ChannelGap> channels;
+  std::vector<double> nuisance;            ///< fitted nuisance values (with the selection)
+  std::vector<double> residuals_before;    ///< channel-major, channel units
+  std::vector<double> residuals_after;
+  RobotModel augmented;                    ///< base plus the named effects
+  double wall_time_s = 0.0;
+};
+
+/// Decides one question on `base` (the model the question starts from).
+QuestionResult analyse_question(Question question, const RobotModel& base,
+                                const QuestionReplay& replay, const std::vector<Candidate>& library,
+                                const QuestionOptions& options);
+
+}  // namespace swivel::model_gap

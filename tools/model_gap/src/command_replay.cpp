@@ -1,0 +1,235 @@
+#include "swivel/model_gap/command_replay.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "swivel/motion/twist_limiter.hpp"
+#include "swivel/pose_math.hpp"
+#include "swivel/sim/effects.hpp"
+#include "swivel/sim/open_loop.hpp"
+#include "swivel/sim/world.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Longest integration sub-step. The swpc world costs a least-squares solve per sub-step and
+// is replayed hundreds of times per analysis; half a 100 Hz row keeps the first-order hold
+// of the commands and the drives' lags resolved.
+constexpr double kSwpcSubstepS = 0.005;
+constexpr double kDifferentialSubstepS = 0.0025;
+// A replayed caster further than this many steering-encoder counts from its measured angle
+// is put back on it.
+constexpr double kResyncCounts = 3.0;
+
+// Value of a logged column at time t: linear between rows, held beyond the ends.
+double sample(const std::vector<double>& t, const std::vector<double>& v, double t_s,
+              std::size_t& hint) {
+  if (t_s <= t.front()) return v.front();
+  if (t_s >= t.back()) return v.back();
+  while (hint + 1 < t.size() && t[hint + 1] < t_s) ++hint;
+  while (hint > 0 && t[hint] > t_s) --hint;
+  const double f = (t_s - t[hint]) / (t[hint + 1] - t[hint]);
+  return v[hint] + f * (v[hint + 1] - v[hint]);
+}
+
+// Growth factor (e-folds) of a leading caster's angle error over a window beyond which the
+// window is not compared.
+constexpr double kMaxSwingGrowth = 0.5;
+
+// Windows in which no caster leads its motion for long: along the path (body twist from the
+// dead-reckoned poses), a caster's angle error grows at -(u . v_s) / d, positive while it
+// leads; its integral over a window must stay below kMaxSwingGrowth.
+std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& run,
+                                     const std::vector<Window>& windows, const std::vector<Pose2>& path) {
+  std::vector<char> out(windows.size(), 1);
+  if (run.drivetrain != DrivetrainKind::kSwpc) return out;
+  const std::size_t n = run.size();
+  std::vector<double> growth(n, 0.0);  // per row, the largest over modules
+  for (std::size_t k = 1; k < n; ++k) {
+    const double dt = run.t_s[k] - run.t_s[k - 1];
+    if (!(dt > 0.0) || !std::isfinite(path[k].x_m) || !std::isfinite(path[k - 1].x_m)) continue;
+    const Pose2 step = between(path[k - 1], path[k]);
+    const Twist2 twist{step.x_m / dt, step.y_m / dt, step.yaw_rad / dt};
+    for (std::size_t i = 0; i < nominal.modules.size(); ++i) {
+      const SwpcModuleParams& m = nominal.modules[i];
+      const double vx = twist.vx_mps - twist.wz_radps * m.y_m;
+      const double vy = twist.vy_mps + twist.wz_radps * m.x_m;
+      const double phi = run.steer_rad[i][k - 1] + m.steering_offset_rad;
+      const double lambda = -(std::cos(phi) * vx + std::sin(phi) * vy) / m.caster_offset_m;
+      growth[k] = std::max(growth[k], std::max(0.0, lambda) * dt);
+    }
+  }
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    double g = 0.0;
+    for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) g += growth[k];
+    out[j] = g <= kMaxSwingGrowth ? 1 : 0;
+  }
+  return out;
+}
+
+}  // namespace
+
+CommandReplay::CommandReplay(const RobotModel& nominal, const RunData& run,
+                             const SensorReplay& sensors, const std::vector<Pose2>& path)
+    : nominal_(nominal), run_(&run), sensors_(&sensors), windows_(&sensors.windows()) {
+  check_run_fits_model(nominal, run);
+  swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
+  modules_ = run.module_count;
+  const std::size_t n = run.size();
+  row_period_s_ = (run.t_s.back() - run.t_s.front()) / static_cast<double>(n - 1);
+  for (std::size_t i = 0; i < modules_; ++i) {
+    const std::string name = swpc_ ? std::to_string(i + 1) : (i == 0 ? "l" : "r");
+    channels_.push_back({"replay.wheel_" + name + "_rad", "rad", Question::kCommandToMotion,
+                         ChannelKind::kWheelAngle, i});
+  }
+  if (swpc_) {
+    for (std::size_t i = 0; i < modules_; ++i) {
+      channels_.push_back({"replay.steer_" + std::to_string(i + 1) + "_rad", "rad",
+                           Question::kCommandToMotion, ChannelKind::kSteerAngle, i});
+    }
+  }
+  compared_ = swing_free_windows(nominal, run, *windows_, path);
+}
+
+bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
+                             bool move_body, Track& track) const {
+  const RunData& run = *run_;
+  const std::size_t n = std::min(run.size(), end_row);
+  const sim::PlantParams plant = sim::resolve_plant(model);
+  sim::SimOptions options;
+  options.sensor_noise = false;
+  options.quantize_encoders = false;
+  options.motion_capture = false;
+  options.move_body = move_body;
+  options.start_pose = sensors_->start_pose();
+  const double max_substep = swpc_ ? kSwpcSubstepS : kDifferentialSubstepS;
+  options.substep_s = max_substep;
+  if (swpc_) {
+    for (std::size_t i = 0; i < modules_; ++i) {
+      options.initial_steer_rad[i] = run.steer_rad[i][0] + plant.modules[i].steering_offset_rad;
+    }
+  }
+  sim::World world(model, options);
+  // The robot's controller knows only the nominal geometry; its limits are the model's.
+  const sim::OpenLoopController controller(nominal_, plant.limits);
+  motion::TwistLimiter limiter(plant.limits);
+
+  track.pose.resize(run.size());
+  track.wheel.resize(modules_);
+  track.steer.resize(modules_);
+  for (std::size_t i = 0; i < modules_; ++i) {
+    track.wheel[i].resize(run.size());
+    track.steer[i].resize(run.size());
+  }
+  HardwareState hw;
+  world.read(hw);
+  const auto record = [&](std::size_t k) {
+    const Pose2& p = world.true_pose();
+    const double previous = k == 0 ? p.yaw_rad : track.pose[k - 1].yaw_rad;
+    track.pose[k] = Pose2{p.x_m, p.y_m, previous + wrap_pi(p.yaw_rad - previous)};
+    for (std::size_t i = 0; i < modules_; ++i) {
+      track.wheel[i][k] = hw.wheel_angle_rad[i];
+
+    }
+  };
+  record(0);
+  std::size_t cmd_hint = 0;
+  const double resync_rad =
+      kResyncCounts * 2.0 * std::numbers::pi / std::max(nominal_.sensors.steering_encoder_counts_per_rev, 1);
+  HardwareState measured;
+  measured.module_count = static_cast<std::uint32_t>(modules_);
+  ActuatorCommand command;
+  for (std::size_t k = 1; k < n; ++k) {
+    const double dt = run.t_s[k] - run.t_s[k - 1];
+    // A caster that has parted from its measured angle by more than a few encoder counts is
+    // put back there: how a caster swings through a reversal hangs on its exact start, which
+    // the log knows only to a count, so a free-running replay would part from the robot
+    // there. Closer than that it runs free: put on a count, an aligned caster would be pulled
+    // back towards its true angle in every row.
+    std::array<double, kMaxModules> start{};
+    if (swpc_) {
+      for (std::size_t i = 0; i < modules_; ++i) {
+        const double measured_true = run.steer_rad[i][k - 1] + plant.modules[i].steering_offset_rad;
+        if (std::abs(world.true_steer_rad(i) - measured_true) > resync_rad) {
+          world.set_true_steer_rad(i, measured_true);
+        }
+        start[i] = world.true_steer_rad(i);
+      }
+    }
+    const auto substeps = static_cast<int>(std::max(1.0, std::ceil(dt / max_substep - 1e-9)));
+    const double h = dt / substeps;
+    for (int s = 0; s < substeps; ++s) {
+      const double t_mid = run.t_s[k - 1] + (s + 0.5) * h;
+      const double tc = t_mid - command_delay_s;
+      const Twist2 cmd{sample(run.t_s, run.cmd_vx_mps, tc, cmd_hint),
+                       sample(run.t_s, run.cmd_vy_mps, tc, cmd_hint),
+                       sample(run.t_s, run.cmd_wz_radps, tc, cmd_hint)};
+      // The controller steers from the angles its encoders show, at its own rate.
+      if (swpc_) {
+        for (std::size_t i = 0; i < modules_; ++i) {
+          measured.steer_angle_rad[i] = world.true_steer_rad(i) - plant.modules[i].steering_offset_rad;
+        }
+      }
+      controller.velocity(limiter.step(cmd, h), measured, command);
+      if (world.step(h, command) != Status::kOk) return false;
+    }
+    world.read(hw);
+    record(k);
+    if (swpc_) {
+      for (std::size_t i = 0; i < modules_; ++i) {
+        // The turn the replay predicts in this row (a put-back caster starts it afresh).
+        track.steer[i][k] = world.true_steer_rad(i) - start[i];
+      }
+    }
+  }
+  return true;
+}
+
+bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
+                              std::vector<double>& out, std::size_t window_limit) const {
+  const std::vector<Window>& windows = *windows_;
+  const std::size_t w = windows.size();
+  out.assign(channels_.size() * w, kNaN);
+  const std::size_t used = std::min(w, window_limit);
+  const std::size_t end_row = used == 0 ? 1 : windows[used - 1].b + 1;
+  if (!simulate(model, command_delay_s, end_row, false, track_)) return false;
+  const RunData& run = *run_;
+  for (std::size_t j = 0; j < used; ++j) {
+    if (!compared_[j]) continue;
+    const std::size_t a = windows[j].a;
+    const std::size_t b = windows[j].b;
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < modules_; ++i, ++c) {
+      out[c * w + j] = (run.wheel_rad[i][b] - run.wheel_rad[i][a]) - (track_.wheel[i][b] - track_.wheel[i][a]);
+    }
+    if (swpc_) {
+      // The sum of the rows' prediction errors (wrapped: a caster that turned through a
+      // reversal the other way round ends a turn apart and is otherwise the same).
+      for (std::size_t i = 0; i < modules_; ++i, ++c) {
+        double sum = 0.0;
+        for (std::size_t k = a + 1; k <= b; ++k) {
+          sum += wrap_pi(run.steer_rad[i][k] - run.steer_rad[i][k - 1] - track_.steer[i][k]);
+        }
+        out[c * w + j] = sum;
+      }
+    }
+  }
+  for (double v : out) {
+    if (std::isinf(v)) return false;
+  }
+  return true;
+}
+
+void CommandReplay::path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const {
+  out.assign(run_->size(), Pose2{kNaN, kNaN, kNaN});
+  Track track;
+  if (!simulate(model, command_delay_s, run_->size(), true, track)) return;
+  out = track.pose;
+}
+
+}  // namespace swivel::model_gap

@@ -1,0 +1,202 @@
+#include "swivel/model_gap/misfit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "swivel/model_gap/fit.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+// Robust z above which one window is a jump rather than noise (a Gaussian window exceeds
+// it once in 10^15).
+constexpr double kJumpZ = 8.0;
+
+// Regression of whitened residuals y on whitened regressors X (rows x p, row-major) with a
+// autocorrelation-robust Wald test of all coefficients; rows with a non-finite value are skipped.
+struct Regression {
+  double z = 0.0;
+  double share = 0.0;
+  double size = 0.0;  // RMS of the fitted part over the RMS of what is left around it
+  std::vector<double> t;  ///< per coefficient: estimate over its standard deviation
+};
+
+Regression regress(const std::vector<double>& y, const std::vector<double>& x, std::size_t p,
+                   const std::vector<std::size_t>& window, const std::vector<std::size_t>& group,
+                   std::size_t windows) {
+  Regression out;
+  const std::size_t n = y.size();
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd xtx = Eigen::MatrixXd::Zero(pp, pp);
+  Eigen::VectorXd xty = Eigen::VectorXd::Zero(pp);
+  double yty = 0.0;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(y[i])) continue;
+    const Eigen::Map<const Eigen::VectorXd> row(x.data() + i * p, pp);
+    if (!row.allFinite()) continue;
+    xtx.noalias() += row * row.transpose();
+    xty += row * y[i];
+    yty += y[i] * y[i];
+    ++used;
+  }
+  if (used < 3 * p + 5 || yty <= 0.0) return out;
+  const Eigen::VectorXd beta = xtx.completeOrthogonalDecomposition().solve(xty);
+  std::vector<double> r(n, std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> jac(n * p, 0.0);
+  double rss = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(y[i])) continue;
+    const Eigen::Map<const Eigen::VectorXd> row(x.data() + i * p, pp);
+    if (!row.allFinite()) continue;
+    r[i] = y[i] - row.dot(beta);
+    rss += r[i] * r[i];
+    for (std::size_t k = 0; k < p; ++k) jac[i * p + k] = -x[i * p + k];
+  }
+  std::vector<char> observable;
+  const std::vector<double> cov = sandwich_covariance(jac, p, r, window, group, windows, observable);
+  std::vector<double> b(p);
+  for (std::size_t k = 0; k < p; ++k) b[k] = beta(static_cast<Eigen::Index>(k));
+  std::size_t rank = 0;
+  const double chi2 = mahalanobis_squared(b, cov, rank);
+  out.z = rank > 0 ? chi_square_z(chi2, static_cast<double>(rank)) : 0.0;
+  out.share = std::clamp(1.0 - rss / yty, 0.0, 1.0);
+  // Against the noise left around the pattern, not the modelled noise: a noise model fitted
+  // to these residuals has taken in part of the pattern itself.
+  out.size = rss > 0.0 ? std::sqrt(std::max(0.0, yty - rss) / rss) : 0.0;
+  out.t.resize(p);
+  for (std::size_t k = 0; k < p; ++k) {
+    const double var = cov[k * p + k];
+    out.t[k] = var > 0.0 ? b[k] / std::sqrt(var) : 0.0;
+  }
+
+  return out;
+}
+
+double median_abs(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  for (double& x : v) x = std::abs(x);
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
+  std::vector<MisfitTest> out;
+  const std::size_t w = in.windows;
+  std::vector<std::size_t> window(w);
+  for (std::size_t j = 0; j < w; ++j) window[j] = j;
+  const std::vector<std::size_t> one_group(w, 0);
+  const auto whitened = [&](std::size_t c) {
+    std::vector<double> y(w);
+    for (std::size_t j = 0; j < w; ++j) y[j] = in.residuals[c * w + j] / in.sigma[c * w + j];
+    return y;
+  };
+
+  for (std::size_t c = 0; c < in.channels.size(); ++c) {
+    const ChannelInfo& info = in.channels[c];
+    const std::vector<double> y = whitened(c);
+
+    // Jumps: windows far outside the channel's robust spread.
+    std::vector<double> finite;
+    for (double v : y) {
+      if (std::isfinite(v)) finite.push_back(v);
+    }
+    // A jump stands out of the channel's robust spread and of its modelled noise alike (a
+    // channel quieter than its model, say quantized to whole counts, has a tiny spread).
+    const double spread = std::max(1.4826 * median_abs(finite), 1.0);
+    if (spread > 0.0 && finite.size() >= 10) {
+      double peak = 0.0;
+      std::size_t count = 0;
+      for (double v : finite) {
+        const double z = std::abs(v) / spread;
+        peak = std::max(peak, z);
+        if (z > kJumpZ) ++count;
+      }
+      // Reported on the same scale as the other tests: 5 at the jump threshold.
+      out.push_back({"jumps", info.name,
+                     count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "")
+                               : "no jumps",
+                     5.0 * peak / kJumpZ, 0.0, peak * spread, info.module});
+    }
+
+    // Trend: a constant rate, the channel's own motion (signed and absolute) and the
+    // acceleration.
+    constexpr std::size_t kTrend = 4;
+    std::vector<double> x(w * kTrend);
+    for (std::size_t j = 0; j < w; ++j) {
+      const double s = in.sigma[c * w + j];
+      const double m = in.own_change[c * w + j];
+      x[j * kTrend + 0] = 1.0 / s;
+      x[j * kTrend + 1] = m / s;
+      x[j * kTrend + 2] = std::abs(m) / s;
+      x[j * kTrend + 3] = in.accel[j] / s;
+    }
+    const Regression trend = regress(y, x, kTrend, window, one_group, w);
+    static const char* const kTrendLabels[kTrend] = {"grows with time", "grows with its own motion",
+                                                     "grows with the amount of motion",
+                                                     "grows with acceleration"};
+    std::size_t strongest = 0;
+    for (std::size_t k = 1; k < trend.t.size(); ++k) {
+      if (std::abs(trend.t[k]) > std::abs(trend.t[strongest])) strongest = k;
+    }
+    out.push_back({"trend", info.name, trend.t.empty() ? "irregular" : kTrendLabels[strongest],
+                   trend.z, trend.share, trend.size, info.module});
+
+    // Repeats with a wheel's turn: for each wheel, the change of sin and cos of its angle.
+    for (std::size_t i = 0; i < in.wheel_sin_change.size(); ++i) {
+      std::vector<double> xw(w * 2);
+      for (std::size_t j = 0; j < w; ++j) {
+        const double s = in.sigma[c * w + j];
+        xw[j * 2 + 0] = in.wheel_sin_change[i][j] / s;
+        xw[j * 2 + 1] = in.wheel_cos_change[i][j] / s;
+      }
+      const Regression periodic = regress(y, xw, 2, window, one_group, w);
+      out.push_back({"wheel_periodic", info.name,
+                     "repeats with wheel " + std::to_string(i + 1) + "'s turn", periodic.z,
+                     periodic.share, periodic.size, i});
+    }
+  }
+
+  // World drift: the displacement residual turned into the world frame has a constant part.
+  std::size_t cx = in.channels.size();
+  for (std::size_t c = 0; c + 1 < in.channels.size(); ++c) {
+    if (in.channels[c].kind == ChannelKind::kPosition && in.channels[c + 1].kind == ChannelKind::kPosition) {
+      cx = c;
+      break;
+    }
+  }
+  if (cx < in.channels.size()) {
+    // Two rows per window (world x and y), both in the same window for the covariance.
+    std::vector<double> y(2 * w);
+    std::vector<double> x(2 * w * 2, 0.0);
+    std::vector<std::size_t> rows_window(2 * w);
+    std::vector<std::size_t> rows_axis(2 * w);
+    for (std::size_t j = 0; j < w; ++j) {
+      const double rx = in.residuals[cx * w + j];
+      const double ry = in.residuals[(cx + 1) * w + j];
+      const double s = std::sqrt(0.5 * (in.sigma[cx * w + j] * in.sigma[cx * w + j] +
+                                        in.sigma[(cx + 1) * w + j] * in.sigma[(cx + 1) * w + j]));
+      const double c = std::cos(in.start_yaw_rad[j]);
+      const double sn = std::sin(in.start_yaw_rad[j]);
+      y[2 * j] = (c * rx - sn * ry) / s;
+      y[2 * j + 1] = (sn * rx + c * ry) / s;
+      x[(2 * j) * 2 + 0] = 1.0 / s;
+      x[(2 * j + 1) * 2 + 1] = 1.0 / s;
+      rows_window[2 * j] = j;
+      rows_window[2 * j + 1] = j;
+      rows_axis[2 * j] = 0;
+      rows_axis[2 * j + 1] = 1;
+    }
+    const Regression drift = regress(y, x, 2, rows_window, rows_axis, w);
+    out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction", drift.z,
+                   drift.share, drift.size, 0});
+  }
+  std::sort(out.begin(), out.end(), [](const MisfitTest& a, const MisfitTest& b) { return a.z > b.z; });
+  return out;
+}
+
+}  // namespace swivel::model_gap

@@ -1,0 +1,216 @@
+#include "swivel/model_gap/sensor_replay.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <stdexcept>
+
+#include "swivel/differential/differential_kinematics.hpp"
+#include "swivel/localization/eg_odometry.hpp"
+#include "swivel/pose_math.hpp"
+#include "swivel/swpc/swpc_kinematics.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Rows on each side whose motion capture is averaged into a window's end pose.
+constexpr std::size_t kAnchorHalfWidth = 5;
+
+// 1/2 w |w|: its change over a step is the integral of |w| dw/dt, the slip of sim/effects.hpp.
+double half_signed_square(double w) { return 0.5 * w * std::abs(w); }
+
+}  // namespace
+
+void check_run_fits_model(const RobotModel& model, const RunData& run) {
+  if (run.drivetrain != model.drivetrain) {
+    throw std::invalid_argument("run " + run.source + " is from a " +
+                                (run.drivetrain == DrivetrainKind::kSwpc ? "swpc" : "differential") +
+                                " robot but model " + model.source_file + " is not");
+  }
+  if (run.module_count != model.module_count()) {
+    throw std::invalid_argument("run " + run.source + " has " + std::to_string(run.module_count) +
+                                " modules but model " + model.source_file + " has " +
+                                std::to_string(model.module_count()));
+  }
+  if (run.size() < 10) {
+    throw std::invalid_argument("run " + run.source + " has " + std::to_string(run.size()) +
+                                " samples; the workflow needs at least 10");
+  }
+}
+
+Pose2 run_start_pose(const RunData& run) {
+  double sx = 0.0;
+  double sy = 0.0;
+  double syaw = 0.0;
+  double count = 0.0;
+  for (std::size_t k = 0; k < run.size(); ++k) {
+    const bool moving = run.cmd_vx_mps[k] != 0.0 || run.cmd_vy_mps[k] != 0.0 || run.cmd_wz_radps[k] != 0.0;
+    if (count > 0.0 && (moving || run.t_s[k] - run.t_s[0] > 1.0)) break;
+    if (!std::isfinite(run.truth_x_m[k])) continue;
+    sx += run.truth_x_m[k];
+    sy += run.truth_y_m[k];
+    syaw += run.truth_yaw_rad[k];
+    count += 1.0;
+    if (moving) break;
+  }
+  if (count == 0.0) {
+    throw std::invalid_argument("run " + run.source +
+                                " has no motion-capture samples: nothing to compare poses with");
+  }
+  return Pose2{sx / count, sy / count, syaw / count};
+}
+
+SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double window_s)
+    : run_(&run) {
+  check_run_fits_model(nominal, run);
+  swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
+  modules_ = run.module_count;
+  start_ = run_start_pose(run);
+  const std::size_t n = run.size();
+  // Smoothed wheel rates (centred over +-2 samples) keep encoder quantization out of the
+  // slip correction.
+  slip_h_.assign(modules_, std::vector<double>(n, 0.0));
+  for (std::size_t i = 0; i < modules_; ++i) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t lo = k >= 2 ? k - 2 : 0;
+      const std::size_t hi = std::min(n - 1, k + 2);
+      const double dt = run.t_s[hi] - run.t_s[lo];
+      slip_h_[i][k] = dt > 0.0 ? half_signed_square((run.wheel_rad[i][hi] - run.wheel_rad[i][lo]) / dt) : 0.0;
+    }
+  }
+  const auto add = [this](const char* name, const char* unit, ChannelKind kind) {
+    channels_.push_back({name, unit, Question::kSensorToPose, kind, 0});
+  };
+  add("dead_reckoning.dx_m", "m", ChannelKind::kPosition);
+  add("dead_reckoning.dy_m", "m", ChannelKind::kPosition);
+  add("dead_reckoning.dyaw_gyro_rad", "rad", ChannelKind::kHeading);
+  add("dead_reckoning.dyaw_encoders_rad", "rad", ChannelKind::kHeading);
+
+  windows_ = make_windows(run, window_s, run.t_s.front(), run.t_s.back() - kMaxLatencyS);
+  motion_ = window_motion(run, windows_);
+  // Anchors use the nominal dead reckoning as the local shape of the path.
+  std::vector<Pose2> shape;
+  path(sim::resolve_plant(nominal), shape);
+  for (const Window& w : windows_) {
+    anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
+    anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
+  }
+}
+
+bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row) const {
+  const RunData& run = *run_;
+  const std::size_t n = std::min(run.size(), end_row);
+  localization::EgConfig config;
+  config.heading_source = localization::HeadingSource::kGyro;
+  config.gyro_scale = plant.sensors.gyro.scale;
+  config.gyro_bias_radps = plant.sensors.gyro.bias_rad_s;
+  localization::EgOdometry eg(config);
+  eg.reset(start_);
+  track_.resize(run.size());
+  encoder_yaw_.resize(run.size());
+  track_[0] = start_;
+  encoder_yaw_[0] = 0.0;
+  const double g = plant.slip_gain_per_radps2;
+  std::array<double, kMaxModules> dpsi{};
+  std::array<double, kMaxModules> phi{};
+  std::array<double, kMaxModules> steer_rate{};
+  std::array<double, kMaxModules> wheel_rate{};
+  for (std::size_t k = 1; k < n; ++k) {
+    const double dt = run.t_s[k] - run.t_s[k - 1];
+    for (std::size_t i = 0; i < modules_; ++i) {
+      // The contact point rolls less than the wheel turns while it speeds up.
+      dpsi[i] = run.wheel_rad[i][k] - run.wheel_rad[i][k - 1] - g * (slip_h_[i][k] - slip_h_[i][k - 1]);
+    }
+    Pose2 delta;
+    if (!swpc_) {
+      delta = differential::forward_increment(plant.differential, dpsi[0], dpsi[1]);
+    } else {
+      for (std::size_t i = 0; i < modules_; ++i) {
+        const double dphi = run.steer_rad[i][k] - run.steer_rad[i][k - 1];
+        phi[i] = run.steer_rad[i][k - 1] + 0.5 * dphi + plant.modules[i].steering_offset_rad;
+        steer_rate[i] = dphi / dt;
+        wheel_rate[i] = dpsi[i] / dt;
+      }
+      const swpc::ForwardResult fit = swpc::forward(
+          std::span<const SwpcModuleParams>(plant.modules.data(), modules_),
+          std::span<const double>(phi.data(), modules_), std::span<const double>(steer_rate.data(), modules_),
+          std::span<const double>(wheel_rate.data(), modules_));
+      if (!fit.ok) return false;
+      delta = swpc::integrate_twist(fit.twist, dt);
+    }
+    // gyro[k] is the mean rate over (t[k-1], t[k]].
+    if (!eg.step(delta, dt, run.gyro_radps[k], true)) return false;
+    const Pose2 p = eg.pose();
+    track_[k] = Pose2{p.x_m, p.y_m, eg.unwrapped_yaw_rad()};
+    encoder_yaw_[k] = encoder_yaw_[k - 1] + delta.yaw_rad;
+  }
+  return true;
+}
+
+Pose2 SensorReplay::pose_at(double t_s) const {
+  const std::vector<double>& t = run_->t_s;
+  if (t_s <= t.front()) return track_.front();
+  if (t_s >= t.back()) return track_.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), t_s);
+  const auto k = static_cast<std::size_t>(it - t.begin());
+  const double f = (t_s - t[k - 1]) / (t[k] - t[k - 1]);
+  return lerp(track_[k - 1], track_[k], f);
+}
+
+double SensorReplay::encoder_yaw_at(double t_s) const {
+  const std::vector<double>& t = run_->t_s;
+  if (t_s <= t.front()) return encoder_yaw_.front();
+  if (t_s >= t.back()) return encoder_yaw_.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), t_s);
+  const auto k = static_cast<std::size_t>(it - t.begin());
+  const double f = (t_s - t[k - 1]) / (t[k] - t[k - 1]);
+  return encoder_yaw_[k - 1] + f * (encoder_yaw_[k] - encoder_yaw_[k - 1]);
+}
+
+bool SensorReplay::residuals(const sim::PlantParams& plant, std::vector<double>& out,
+                             std::size_t window_limit) const {
+  const std::size_t w = windows_.size();
+  out.assign(channels_.size() * w, kNaN);
+  const std::size_t used = std::min(w, window_limit);
+  // Rows up to the last window's end plus the longest latency a fit may try.
+  std::size_t end_row = run_->size();
+  if (used > 0 && used < w) {
+    end_row = windows_[used - 1].b + 1;
+    while (end_row < run_->size() && run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + kMaxLatencyS) ++end_row;
+  }
+  if (!integrate(plant, end_row)) return false;
+  // Encoders and gyro lag motion capture by the delay: what they say at t + delay is where
+  // the robot was at t.
+  const double delay = plant.sensor_delay_s;
+  const std::vector<double>& t = run_->t_s;
+  for (std::size_t j = 0; j < used; ++j) {
+    const Pose2& ma = anchor_a_[j];
+    const Pose2& mb = anchor_b_[j];
+    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m)) continue;
+    const double ta = t[windows_[j].a] + delay;
+    const double tb = t[windows_[j].b] + delay;
+    const Pose2 measured = between(ma, mb);
+    const Pose2 predicted = between(pose_at(ta), pose_at(tb));
+    const double encoder_turn = encoder_yaw_at(tb) - encoder_yaw_at(ta);
+    out[0 * w + j] = measured.x_m - predicted.x_m;
+    out[1 * w + j] = measured.y_m - predicted.y_m;
+    out[2 * w + j] = measured.yaw_rad - predicted.yaw_rad;
+    out[3 * w + j] = (mb.yaw_rad - ma.yaw_rad) - encoder_turn;
+  }
+  for (double v : out) {
+    if (std::isinf(v)) return false;
+  }
+  return true;
+}
+
+void SensorReplay::path(const sim::PlantParams& plant, std::vector<Pose2>& out) const {
+  const std::size_t n = run_->size();
+  out.assign(n, Pose2{kNaN, kNaN, kNaN});
+  if (!integrate(plant, n)) return;
+  for (std::size_t k = 0; k < n; ++k) out[k] = pose_at(run_->t_s[k] + plant.sensor_delay_s);
+}
+
+}  // namespace swivel::model_gap

@@ -1,0 +1,98 @@
+#include "swivel/model_gap/misfit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace swivel::model_gap {
+namespace {
+
+constexpr std::size_t kWindows = 120;
+
+// Two position channels and a heading channel of pure noise (sigma 1), with the robot
+// turning through every heading and its wheels through every angle.
+MisfitInputs noise_only(unsigned seed) {
+  MisfitInputs in;
+  in.channels = {{"dx", "m", Question::kSensorToPose, ChannelKind::kPosition, 0},
+                 {"dy", "m", Question::kSensorToPose, ChannelKind::kPosition, 0},
+                 {"dyaw", "rad", Question::kSensorToPose, ChannelKind::kHeading, 0}};
+  in.windows = kWindows;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (std::size_t c = 0; c < 3; ++c) {
+    for (std::size_t j = 0; j < kWindows; ++j) {
+      in.residuals.push_back(gauss(rng));
+      in.sigma.push_back(1.0);
+      in.own_change.push_back(0.3 * std::sin(0.37 * static_cast<double>(j)) + (c == 0 ? 0.2 : 0.0));
+    }
+  }
+  in.wheel_sin_change.assign(1, std::vector<double>(kWindows));
+  in.wheel_cos_change.assign(1, std::vector<double>(kWindows));
+  for (std::size_t j = 0; j < kWindows; ++j) {
+    in.accel.push_back(j % 7 == 0 ? 0.5 : 0.0);
+    in.start_yaw_rad.push_back(0.29 * static_cast<double>(j));
+    const double pa = 5.1 * static_cast<double>(j);
+    const double pb = pa + 5.1;
+    in.wheel_sin_change[0][j] = std::sin(pb) - std::sin(pa);
+    in.wheel_cos_change[0][j] = std::cos(pb) - std::cos(pa);
+  }
+  return in;
+}
+
+double z_of(const std::vector<MisfitTest>& tests, const std::string& test, const std::string& channel) {
+  for (const auto& t : tests) {
+    if (t.test == test && t.channel == channel) return t.z;
+  }
+  ADD_FAILURE() << "no test " << test << " on " << channel;
+  return 0.0;
+}
+
+TEST(Misfit, NoiseAloneLeavesEveryTestQuiet) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const auto tests = misfit_tests(noise_only(seed));
+    ASSERT_FALSE(tests.empty());
+    EXPECT_LT(tests.front().z, 5.0) << "seed " << seed << ": " << tests.front().test << " on "
+                                    << tests.front().channel;
+  }
+}
+
+TEST(Misfit, ADriftFixedInTheWorldIsFound) {
+  MisfitInputs in = noise_only(7);
+  // The world frame moves 2 sigma per window along world x: in the robot frame at each
+  // window's start that is R(-yaw) (2, 0).
+  for (std::size_t j = 0; j < kWindows; ++j) {
+    in.residuals[0 * kWindows + j] += 2.0 * std::cos(in.start_yaw_rad[j]);
+    in.residuals[1 * kWindows + j] += -2.0 * std::sin(in.start_yaw_rad[j]);
+  }
+  const auto tests = misfit_tests(in);
+  EXPECT_GT(z_of(tests, "world_drift", "dx"), 5.0);
+  EXPECT_EQ(tests.front().test, "world_drift");
+}
+
+TEST(Misfit, APatternWithTheWheelsTurnIsFound) {
+  MisfitInputs in = noise_only(8);
+  for (std::size_t j = 0; j < kWindows; ++j) in.residuals[j] += 1.5 * in.wheel_sin_change[0][j];
+  const auto tests = misfit_tests(in);
+  EXPECT_GT(z_of(tests, "wheel_periodic", "dx"), 5.0);
+}
+
+TEST(Misfit, ATrendAndAJumpAreFound) {
+  MisfitInputs in = noise_only(9);
+  for (std::size_t j = 0; j < kWindows; ++j) in.residuals[2 * kWindows + j] += 1.0;  // a constant rate
+  in.residuals[0 * kWindows + 40] += 25.0;  // one jump
+  const auto tests = misfit_tests(in);
+  EXPECT_GT(z_of(tests, "trend", "dyaw"), 5.0);
+  EXPECT_GT(z_of(tests, "jumps", "dx"), 5.0);
+  for (const auto& t : tests) {
+    if (t.test == "trend" && t.channel == "dyaw") {
+      EXPECT_EQ(t.label, "grows with time");
+    }
+    if (t.test == "jumps" && t.channel == "dx") {
+      EXPECT_EQ(t.label, "1 isolated jump");
+    }
+  }
+}
+
+}  // namespace
+}  // namespace swivel::model_gap
