@@ -237,7 +237,7 @@ TEST_F(DaemonConfigTest, RobotModelErrorsNameTheModelFile) {
   std::ofstream(dir_ / "robots/docent.yaml", std::ios::app) << "colour: blue\n";
   EXPECT_EQ(error_of(kValid),
             "robots/docent.yaml:13:1: colour: unknown key (known: name, drivetrain, "
-            "differential, sensors, effects)");
+            "differential, sensors, limits, effects)");
 }
 
 TEST_F(DaemonConfigTest, PluginNameMustBeAName) {
