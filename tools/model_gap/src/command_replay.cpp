@@ -22,19 +22,30 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // of the commands and the drives' lags resolved.
 constexpr double kSwpcSubstepS = 0.005;
 constexpr double kDifferentialSubstepS = 0.0025;
-// A replayed caster further than this many steering-encoder counts from its measured angle
-// is put back on it.
-constexpr double kResyncCounts = 3.0;
 
-// Value of a logged column at time t: linear between rows, held beyond the ends.
-double sample(const std::vector<double>& t, const std::vector<double>& v, double t_s,
-              std::size_t& hint) {
-  if (t_s <= t.front()) return v.front();
-  if (t_s >= t.back()) return v.back();
-  while (hint + 1 < t.size() && t[hint + 1] < t_s) ++hint;
-  while (hint > 0 && t[hint] > t_s) --hint;
-  const double f = (t_s - t[hint]) / (t[hint + 1] - t[hint]);
-  return v[hint] + f * (v[hint + 1] - v[hint]);
+// Mean over [a, b] of a logged column read as each row's value holding from halfway to the
+// row before to halfway to the row after (a < b, both within a row or two of each other).
+double mean_nearest(const std::vector<double>& t, const std::vector<double>& v, double a, double b,
+                    std::size_t& hint) {
+  const std::size_t n = t.size();
+  // Row k holds over [m(k-1), m(k)), m(k) the midpoint after row k.
+  const auto mid = [&t, n](std::size_t k) {
+    return k + 1 < n ? 0.5 * (t[k] + t[k + 1]) : std::numeric_limits<double>::infinity();
+  };
+  while (hint + 1 < n && mid(hint) <= a) ++hint;
+  while (hint > 0 && mid(hint - 1) > a) --hint;
+  double sum = 0.0;
+  double from = a;
+  std::size_t k = hint;
+  while (from < b) {
+    const double to = std::min(b, mid(k));
+    sum += v[k] * (to - from);
+    from = to;
+    if (k + 1 >= n) break;
+    ++k;
+  }
+  if (from < b) sum += v[n - 1] * (b - from);
+  return sum / (b - a);
 }
 
 // Growth factor (e-folds) of a leading caster's angle error over a window beyond which the
@@ -139,36 +150,23 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
   };
   record(0);
   std::size_t cmd_hint = 0;
-  const double resync_rad =
-      kResyncCounts * 2.0 * std::numbers::pi / std::max(nominal_.sensors.steering_encoder_counts_per_rev, 1);
   HardwareState measured;
   measured.module_count = static_cast<std::uint32_t>(modules_);
   ActuatorCommand command;
   for (std::size_t k = 1; k < n; ++k) {
     const double dt = run.t_s[k] - run.t_s[k - 1];
-    // A caster that has parted from its measured angle by more than a few encoder counts is
-    // put back there: how a caster swings through a reversal hangs on its exact start, which
-    // the log knows only to a count, so a free-running replay would part from the robot
-    // there. Closer than that it runs free: put on a count, an aligned caster would be pulled
-    // back towards its true angle in every row.
     std::array<double, kMaxModules> start{};
-    if (swpc_) {
-      for (std::size_t i = 0; i < modules_; ++i) {
-        const double measured_true = run.steer_rad[i][k - 1] + plant.modules[i].steering_offset_rad;
-        if (std::abs(world.true_steer_rad(i) - measured_true) > resync_rad) {
-          world.set_true_steer_rad(i, measured_true);
-        }
-        start[i] = world.true_steer_rad(i);
-      }
-    }
+    for (std::size_t i = 0; i < modules_; ++i) start[i] = world.true_steer_rad(i);
     const auto substeps = static_cast<int>(std::max(1.0, std::ceil(dt / max_substep - 1e-9)));
     const double h = dt / substeps;
     for (int s = 0; s < substeps; ++s) {
-      const double t_mid = run.t_s[k - 1] + (s + 0.5) * h;
-      const double tc = t_mid - command_delay_s;
-      const Twist2 cmd{sample(run.t_s, run.cmd_vx_mps, tc, cmd_hint),
-                       sample(run.t_s, run.cmd_vy_mps, tc, cmd_hint),
-                       sample(run.t_s, run.cmd_wz_radps, tc, cmd_hint)};
+      // The commands of the sub-step: their mean over it, so that the replay moves smoothly
+      // with the fitted timing.
+      const double t0 = run.t_s[k - 1] + s * h - command_delay_s;
+      std::size_t hint = cmd_hint;
+      const Twist2 cmd{mean_nearest(run.t_s, run.cmd_vx_mps, t0, t0 + h, hint),
+                       mean_nearest(run.t_s, run.cmd_vy_mps, t0, t0 + h, hint),
+                       mean_nearest(run.t_s, run.cmd_wz_radps, t0, t0 + h, cmd_hint)};
       // The controller steers from the angles its encoders show, at its own rate.
       if (swpc_) {
         for (std::size_t i = 0; i < modules_; ++i) {
@@ -182,7 +180,6 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
     record(k);
     if (swpc_) {
       for (std::size_t i = 0; i < modules_; ++i) {
-        // The turn the replay predicts in this row (a put-back caster starts it afresh).
         track.steer[i][k] = world.true_steer_rad(i) - start[i];
       }
     }
@@ -208,8 +205,8 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
       out[c * w + j] = (run.wheel_rad[i][b] - run.wheel_rad[i][a]) - (track_.wheel[i][b] - track_.wheel[i][a]);
     }
     if (swpc_) {
-      // The sum of the rows' prediction errors (wrapped: a caster that turned through a
-      // reversal the other way round ends a turn apart and is otherwise the same).
+      // The sum of the rows' differences (wrapped: a caster that turned through a reversal
+      // the other way round ends a turn apart and is otherwise the same).
       for (std::size_t i = 0; i < modules_; ++i, ++c) {
         double sum = 0.0;
         for (std::size_t k = a + 1; k <= b; ++k) {
@@ -223,6 +220,21 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
     if (std::isinf(v)) return false;
   }
   return true;
+}
+
+std::vector<double> CommandReplay::timing_variance(const RobotModel& model, double command_delay_s) const {
+  std::vector<double> early;
+  std::vector<double> late;
+  std::vector<double> out(channels_.size() * windows_->size(), 0.0);
+  if (!residuals(model, command_delay_s - 0.5 * row_period_s_, early) ||
+      !residuals(model, command_delay_s + 0.5 * row_period_s_, late)) {
+    return out;
+  }
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const double d = late[k] - early[k];
+    out[k] = std::isfinite(d) ? d * d / 12.0 : 0.0;
+  }
+  return out;
 }
 
 void CommandReplay::path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const {

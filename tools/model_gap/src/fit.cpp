@@ -13,8 +13,11 @@ namespace swivel::model_gap {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Eigenvalues of J'J below this share of the largest are directions the data do not fix.
+// Eigenvalues of a covariance below this share of the largest are directions it leaves out.
 constexpr double kRankTolerance = 1e-9;
+// Eigenvalues of J'J (parameters in their typical magnitudes) below this share of the
+// largest are combinations the run does not inform enough to fix.
+constexpr double kWeakInformation = 1e-3;
 
 // Every row; rows without data (NaN) count as zero so that the residual vector keeps a
 // fixed size. Forward differences with a fixed step in z: the replay is smooth in its
@@ -280,7 +283,7 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   for (Eigen::Index k = 0; k < pp; ++k) {
     const Eigen::VectorXd v = eig.eigenvectors().col(k);
     const double lambda = eig.eigenvalues()(k);
-    if (lambda > kRankTolerance * top && lambda > 0.0) {
+    if (lambda > kWeakInformation * top && lambda > 0.0) {
       inverse += v * v.transpose() / lambda;
     } else {
       null_space += v * v.transpose();
@@ -340,23 +343,50 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &solver_problem, &summary);
 
+  // Jacobian at the optimum (z units).
+  ceres::CRSMatrix jac;
+  ceres::Problem::EvaluateOptions eval;
+  const bool have_jacobian = solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac);
+  std::vector<double> dense(have_jacobian ? static_cast<std::size_t>(jac.num_rows) * p : 0U, 0.0);
+  if (have_jacobian) {
+    for (int r = 0; r < jac.num_rows; ++r) {
+      for (int k = jac.rows[static_cast<std::size_t>(r)]; k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
+        dense[static_cast<std::size_t>(r) * p + static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
+            jac.values[static_cast<std::size_t>(k)];
+      }
+    }
+    // Combinations the run barely informs go back to their anchors.
+    const auto pp = static_cast<Eigen::Index>(p);
+    Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
+    for (int r = 0; r < jac.num_rows; ++r) {
+      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p, pp);
+      information.noalias() += row * row.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(information);
+    const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+    Eigen::VectorXd offset(pp);
+    for (std::size_t j = 0; j < p; ++j) {
+      const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
+      offset(static_cast<Eigen::Index>(j)) = z[j] - anchor / specs[j].scale;
+    }
+    Eigen::VectorXd removed = Eigen::VectorXd::Zero(pp);
+    for (Eigen::Index k = 0; k < pp; ++k) {
+      if (eig.eigenvalues()(k) > kWeakInformation * top) continue;
+      const Eigen::VectorXd v = eig.eigenvectors().col(k);
+      removed += v * v.dot(offset);
+    }
+    if (removed.norm() > 0.0) {
+      for (std::size_t j = 0; j < p; ++j) {
+        z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)), specs[j].lower / specs[j].scale,
+                          specs[j].upper / specs[j].scale);
+      }
+    }
+  }
   std::vector<double> theta(p);
   for (std::size_t j = 0; j < p; ++j) theta[j] = z[j] * specs[j].scale;
   FitOutcome out = score(problem, theta);
   out.iterations = static_cast<int>(summary.iterations.size());
-  if (!out.ok) return out;
-
-  // Jacobian at the optimum (z units), then the sandwich covariance in value units.
-  ceres::CRSMatrix jac;
-  ceres::Problem::EvaluateOptions eval;
-  if (!solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac)) return out;
-  std::vector<double> dense(static_cast<std::size_t>(jac.num_rows) * p, 0.0);
-  for (int r = 0; r < jac.num_rows; ++r) {
-    for (int k = jac.rows[static_cast<std::size_t>(r)]; k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
-      dense[static_cast<std::size_t>(r) * p + static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
-          jac.values[static_cast<std::size_t>(k)];
-    }
-  }
+  if (!out.ok || !have_jacobian) return out;
   std::vector<std::size_t> groups = problem.row_group;
   if (groups.empty()) groups.assign(problem.row_count, 0);
   const std::vector<double> cov_z = sandwich_covariance(dense, p, out.residuals, problem.row_window,
@@ -371,11 +401,24 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
       bread.noalias() += row * row.transpose();
     }
     const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
-    const Eigen::MatrixXd naive = bread.completeOrthogonalDecomposition().pseudoInverse() * (out.rss / dof);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(bread);
+    const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+    Eigen::MatrixXd naive = Eigen::MatrixXd::Zero(pp, pp);
+    for (Eigen::Index k = 0; k < pp; ++k) {
+      const double lambda = eig.eigenvalues()(k);
+      if (lambda > kWeakInformation * top && lambda > 0.0) {
+        naive += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose() / lambda;
+      }
+    }
+    naive *= out.rss / dof;
     out.naive_sigmas.resize(p);
+    out.naive_covariance.resize(p * p);
     for (std::size_t a = 0; a < p; ++a) {
       const auto aa = static_cast<Eigen::Index>(a);
       out.naive_sigmas[a] = std::sqrt(std::max(naive(aa, aa), 0.0)) * specs[a].scale;
+      for (std::size_t b = 0; b < p; ++b) {
+        out.naive_covariance[a * p + b] = naive(aa, static_cast<Eigen::Index>(b)) * specs[a].scale * specs[b].scale;
+      }
     }
   }
   out.covariance.assign(p * p, 0.0);

@@ -3,11 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
 namespace {
+
+// What the replay resolves of a fitted limit, relative: it applies the limiter per sub-step
+// (5 ms on a four-caster robot) where the robot does per control cycle, which moves a
+// ramp's ends by up to half a sub-step.
+constexpr double kLimitResolution = 0.01;
 
 // Typical magnitude of each effect parameter: the fit works in units of it, and it sets the
 // finite-difference step.
@@ -21,15 +27,15 @@ double typical_magnitude(const std::string& effect) {
   return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width
 }
 
+const char* const kSensorEffects[] = {"gyro_bias",      "gyro_scale",      "wheel_radius",
+                                      "track_width",    "caster_offset",   "steering_offset",
+                                      "sensor_latency", "slip"};
+const char* const kCommandEffects[] = {"actuator_lag", "steering_lag"};
+
 bool in_question(const std::string& effect, Question q) {
-  static const char* const kSensor[] = {"gyro_bias",       "gyro_scale",     "wheel_radius",
-                                        "track_width",     "caster_offset",  "steering_offset",
-                                        "sensor_latency",  "slip"};
-  static const char* const kCommand[] = {"actuator_lag", "steering_lag"};
-  if (q == Question::kSensorToPose) {
-    return std::any_of(std::begin(kSensor), std::end(kSensor), [&](const char* e) { return effect == e; });
-  }
-  return std::any_of(std::begin(kCommand), std::end(kCommand), [&](const char* e) { return effect == e; });
+  const auto is = [&effect](const char* e) { return effect == e; };
+  if (q == Question::kSensorToPose) return std::any_of(std::begin(kSensorEffects), std::end(kSensorEffects), is);
+  return std::any_of(std::begin(kCommandEffects), std::end(kCommandEffects), is);
 }
 
 std::optional<double>* limit_field(MotionLimits& limits, const std::string& key) {
@@ -49,6 +55,7 @@ void add_limit(Candidate& c, RobotModel model, const std::string& key, double pe
   s.lower = 0.0;
   s.upper = 100.0;
   const double identity = stated->has_value() ? 1.0 / **stated : 0.0;
+  s.anchor = identity;
   if (stated->has_value()) {
     s.initial = identity;
   } else {
@@ -58,9 +65,19 @@ void add_limit(Candidate& c, RobotModel model, const std::string& key, double pe
   c.params.push_back(s);
   c.identity.push_back(identity);
   c.inverse.push_back(1);
+  c.resolution.push_back(0.0);  // relative: see Candidate::sigma
 }
 
 }  // namespace
+
+Question question_of(const std::string& candidate) {
+  if (in_question(candidate, Question::kSensorToPose)) return Question::kSensorToPose;
+  if (in_question(candidate, Question::kCommandToMotion) || candidate == "accel_limit" ||
+      candidate == "steering_rate_limit") {
+    return Question::kCommandToMotion;
+  }
+  throw std::invalid_argument("unknown model-gap candidate '" + candidate + "'");
+}
 
 void Candidate::apply(RobotModel& model, std::span<const double> theta) const {
   if (target == Target::kEffect) {
@@ -85,13 +102,20 @@ double Candidate::value(std::size_t i, double fit) const {
   return fit > 1e-12 ? 1.0 / fit : std::numeric_limits<double>::infinity();
 }
 
+double Candidate::fit_resolution(std::size_t i, double fit) const {
+  // A relative resolution of the limit is the same relative resolution of 1 / limit.
+  return inverse[i] ? kLimitResolution * std::abs(fit) : resolution[i];
+}
+
 double Candidate::sigma(std::size_t i, double fit, double fit_sigma) const {
-  if (!inverse[i]) return fit_sigma;
-  return fit > 1e-12 ? fit_sigma / (fit * fit) : std::numeric_limits<double>::infinity();
+  if (!inverse[i]) return std::hypot(fit_sigma, resolution[i]);
+  if (!(fit > 1e-12)) return std::numeric_limits<double>::infinity();
+  const double limit = 1.0 / fit;
+  return std::hypot(fit_sigma / (fit * fit), kLimitResolution * limit);
 }
 
 std::vector<Candidate> candidate_library(const RobotModel& nominal, Question question,
-                                         const MotionPeaks& peaks) {
+                                         const MotionPeaks& peaks, double row_period_s) {
   std::vector<Candidate> out;
   for (const sim::EffectInfo& e : sim::effect_library(nominal)) {
     if (!in_question(e.name, question)) continue;
@@ -109,6 +133,7 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
         identity = have->second.at(p.key);
       }
       s.initial = identity;
+      s.anchor = identity;
       // A lag or delay is flat in its parameter near zero (shorter than an integration
       // step): start such fits inside the range, at a typical value.
       if (p.identity <= p.min && identity <= p.min) s.initial = p.min + s.scale;
@@ -119,6 +144,8 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
       c.params.push_back(s);
       c.identity.push_back(identity);
       c.inverse.push_back(0);
+      const bool lag = e.name == "actuator_lag" || e.name == "steering_lag";
+      c.resolution.push_back(lag ? row_period_s / std::sqrt(12.0) : 0.0);
     }
     out.push_back(std::move(c));
   }

@@ -5,11 +5,14 @@
 
 namespace swivel::model_gap {
 
-double NoiseModel::sigma(std::size_t c, double x) const { return std::sqrt(a[c] + b[c] * x); }
+double NoiseModel::sigma(std::size_t c, double x, double known) const {
+  return std::sqrt(a[c] + b[c] * x + known);
+}
 
 NoiseModel estimate_noise(const std::vector<double>& residuals, std::size_t windows,
                           const std::vector<std::vector<double>>& x,
-                          const std::vector<double>& floor_variance) {
+                          const std::vector<double>& floor_variance, const std::vector<double>& known) {
+  const auto known_at = [&known](std::size_t k) { return known.empty() ? 0.0 : known[k]; };
   const std::size_t channels = x.size();
   NoiseModel m;
   m.a.assign(channels, 0.0);
@@ -18,7 +21,7 @@ NoiseModel estimate_noise(const std::vector<double>& residuals, std::size_t wind
     std::vector<double> sq;
     for (std::size_t j = 0; j < windows; ++j) {
       const double r = residuals[c * windows + j];
-      if (std::isfinite(r)) sq.push_back(r * r);
+      if (std::isfinite(r)) sq.push_back(std::max(0.0, r * r - known_at(c * windows + j)));
     }
     double a = floor_variance[c];
     double b = 0.0;
@@ -34,10 +37,11 @@ NoiseModel estimate_noise(const std::vector<double>& residuals, std::size_t wind
           const double r = residuals[c * windows + j];
           const double xj = x[c][j];
           if (!std::isfinite(r) || !std::isfinite(xj)) continue;
+          const double e = known_at(c * windows + j);
           const double model = a + b * xj;
-          const double r2 = r * r;
-          if (r2 > 16.0 * model) continue;
-          const double w = 1.0 / (model * model);
+          const double r2 = r * r - e;
+          if (r * r > 16.0 * (model + e)) continue;
+          const double w = 1.0 / ((model + e) * (model + e));
           s00 += w;
           s01 += w * xj;
           s11 += w * xj * xj;

@@ -96,6 +96,9 @@ struct Fitted {
   FitOutcome fit;
   std::vector<double> z;     // per effect: significance
   std::vector<double> size;  // per effect: what it changes (contribution())
+  // The nominal model on the same stretch (screening fits a shorter one).
+  double rss_reference = 0.0;
+  double bic_reference = 0.0;
 };
 
 // How much an effect changes the prediction: the largest, over channels, RMS of the
@@ -146,24 +149,38 @@ std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
 // by how much the residuals' correlation widens its parameters' uncertainty. A likelihood
 // ratio, not a Wald test against the nominal values: a limit the run barely reaches is
 // precisely fitted yet changes nothing, and must not count as significant.
-double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without) {
-  if (!with.ok || with.n <= with.values.size()) return 0.0;
-  const double s2 = with.rss / static_cast<double>(with.n - with.values.size());
-  double inflation = 0.0;
-  double observed = 0.0;
-  for (std::size_t k = first; k < first + count; ++k) {
-    if (!with.observable[k] || !std::isfinite(with.sigmas[k]) || !(with.naive_sigmas[k] > 0.0)) continue;
-    const double ratio = with.sigmas[k] / with.naive_sigmas[k];
-    inflation += ratio * ratio;
-    observed += 1.0;
+double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
+               const std::vector<double>& identity) {
+  if (!with.ok || with.n <= with.values.size() || with.covariance.empty() || with.naive_covariance.empty()) {
+    return 0.0;
   }
-  if (observed == 0.0 || !(s2 > 0.0)) return 0.0;
-  inflation = std::max(1.0, inflation / observed);
+  const std::size_t p = with.values.size();
+  std::vector<double> d(count);
+  std::vector<double> sandwich(count * count);
+  std::vector<double> naive(count * count);
+  for (std::size_t a = 0; a < count; ++a) {
+    d[a] = with.values[first + a] - identity[a];
+    for (std::size_t b = 0; b < count; ++b) {
+      sandwich[a * count + b] = with.covariance[(first + a) * p + first + b];
+      naive[a * count + b] = with.naive_covariance[(first + a) * p + first + b];
+    }
+  }
+  // How much the residuals' correlation widens the uncertainty along the fitted change.
+  std::size_t rank = 0;
+  std::size_t naive_rank = 0;
+  const double w_sandwich = mahalanobis_squared(d, sandwich, rank);
+  const double w_naive = mahalanobis_squared(d, naive, naive_rank);
+  if (rank == 0 || !(w_sandwich > 0.0) || !std::isfinite(w_naive)) return 0.0;
+  const double inflation = std::max(1.0, w_naive / w_sandwich);
+  const double s2 = with.rss / static_cast<double>(with.n - p);
+  if (!(s2 > 0.0)) return 0.0;
   const double lr = std::max(0.0, rss_without - with.rss) / s2;
-  return chi_square_z(lr / inflation, observed);
+  return chi_square_z(lr / inflation, static_cast<double>(rank));
 }
 
-CandidateScore score_of(const Fitted& f, double rss0, double bic0) {
+CandidateScore score_of(const Fitted& f) {
+  const double rss0 = f.rss_reference;
+  const double bic0 = f.bic_reference;
   CandidateScore s;
   s.ok = f.fit.ok;
   s.z = f.z;
@@ -195,7 +212,10 @@ std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& rep
   const std::size_t w = replay.windows;
   std::vector<double> sigma(replay.channels.size() * w);
   for (std::size_t c = 0; c < replay.channels.size(); ++c) {
-    for (std::size_t j = 0; j < w; ++j) sigma[c * w + j] = noise.sigma(c, replay.noise_x[c][j]);
+    for (std::size_t j = 0; j < w; ++j) {
+      const double known = replay.known_variance.empty() ? 0.0 : replay.known_variance[c * w + j];
+      sigma[c * w + j] = noise.sigma(c, replay.noise_x[c][j], std::isfinite(known) ? known : 0.0);
+    }
   }
   return sigma;
 }
@@ -260,8 +280,12 @@ MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<doubl
 }  // namespace
 
 QuestionResult analyse_question(Question question, const RobotModel& base,
-                                const QuestionReplay& replay, const std::vector<Candidate>& library,
+                                const QuestionReplay& given, const std::vector<Candidate>& library,
                                 const QuestionOptions& options) {
+  QuestionReplay replay = given;
+  std::vector<double> nuisance_initial;
+  for (const ParamSpec& p : replay.nuisance) nuisance_initial.push_back(p.initial);
+  if (replay.known_variance_of) replay.known_variance = replay.known_variance_of(base, nuisance_initial);
   const auto wall_start = std::chrono::steady_clock::now();
   QuestionResult result;
   result.question = question;
@@ -276,7 +300,7 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     throw std::runtime_error(std::string("the nominal model cannot replay the run (") +
                              question_title(question) + ")");
   }
-  NoiseModel noise = estimate_noise(result.residuals_before, w, replay.noise_x, replay.noise_floor);
+  NoiseModel noise = estimate_noise(result.residuals_before, w, replay.noise_x, replay.noise_floor, replay.known_variance);
   eval.set_sigma(row_sigma(noise, replay));
 
   // 2. The nominal model with its nuisance fitted; candidates keep the nuisance there until
@@ -300,8 +324,10 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   const auto single_fit = [&](const Candidate& c, const std::vector<double>& initial, double rss_nominal,
                               const FitOutcome& nominal_fit) {
     Fitted f = run_fit({&c}, initial);
-    f.z = {added_z(f.fit, 0, c.params.size(), rss_nominal)};
+    f.z = {added_z(f.fit, 0, c.params.size(), rss_nominal, c.identity)};
     f.size = {contribution(f.fit, nominal_fit, w)};
+    f.rss_reference = nominal_fit.rss;
+    f.bic_reference = nominal_fit.bic;
     return f;
   };
   const FitOutcome nominal_fixed = score(eval.problem({}, false), {});
@@ -335,10 +361,28 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   } else {
     for (const Candidate& c : library) singles.push_back(single_fit(c, {}, nominal_fixed.rss, nominal_fixed));
   }
+  // An effect is named when significant, large enough to matter, and further from the
+  // model's own values than the replay can resolve (a lag, a limit).
+  const auto resolved = [&](const Fitted& f, std::size_t e) {
+    std::size_t first = 0;
+    for (std::size_t k = 0; k < e; ++k) first += f.effects[k]->params.size();
+    const Candidate& c = *f.effects[e];
+    double chi2 = 0.0;
+    double count = 0.0;
+    for (std::size_t i = 0; i < c.params.size(); ++i) {
+      const double value = f.fit.values[first + i];
+      const double resolution = c.fit_resolution(i, value);
+      if (resolution <= 0.0) continue;
+      const double sigma = std::hypot(std::isfinite(f.fit.sigmas[first + i]) ? f.fit.sigmas[first + i] : 0.0, resolution);
+      chi2 += std::pow((value - c.identity[i]) / sigma, 2);
+      count += 1.0;
+    }
+    return count == 0.0 || chi_square_z(chi2, count) >= options.min_z_name;
+  };
   const auto significant = [&](const Fitted& f) {
     if (!f.fit.ok) return false;
     for (std::size_t e = 0; e < f.z.size(); ++e) {
-      if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size) return false;
+      if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size || !resolved(f, e)) return false;
     }
     return true;
   };
@@ -386,8 +430,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
       std::vector<std::size_t> pool(singles.size());
       std::iota(pool.begin(), pool.end(), 0U);
       std::sort(pool.begin(), pool.end(), [&](std::size_t a, std::size_t b) {
-        return (singles[a].fit.ok ? singles[a].fit.bic - (full[a] ? nominal_fixed.bic : 0.0) : kInf) <
-               (singles[b].fit.ok ? singles[b].fit.bic - (full[b] ? nominal_fixed.bic : 0.0) : kInf);
+        return (singles[a].fit.ok ? singles[a].fit.bic - singles[a].bic_reference : kInf) <
+               (singles[b].fit.ok ? singles[b].fit.bic - singles[b].bic_reference : kInf);
       });
       for (std::size_t k : pool) {
         if (tried >= options.pair_pool) break;
@@ -403,9 +447,11 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
         std::vector<double> initial = chosen->fit.values;
         initial.insert(initial.end(), other.fit.values.begin(), other.fit.values.end());
         Fitted p = run_fit({a, b}, initial);
-        p.z = {added_z(p.fit, 0, a->params.size(), other.fit.rss),
-               added_z(p.fit, a->params.size(), b->params.size(), chosen->fit.rss)};
+        p.z = {added_z(p.fit, 0, a->params.size(), other.fit.rss, a->identity),
+               added_z(p.fit, a->params.size(), b->params.size(), chosen->fit.rss, b->identity)};
         p.size = {contribution(p.fit, other.fit, w), contribution(p.fit, chosen->fit, w)};
+        p.rss_reference = nominal_fixed.rss;
+        p.bic_reference = nominal_fixed.bic;
         pairs.push_back(std::move(p));
       }
       const Fitted* best_pair = nullptr;
@@ -425,8 +471,12 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   Fitted final;
   {
     std::vector<double> raw;
-    if (eval.evaluate(selected, chosen != nullptr ? chosen->fit.values : std::vector<double>{}, false, raw, false)) {
-      noise = estimate_noise(raw, w, replay.noise_x, replay.noise_floor);
+    const std::vector<double> chosen_values = chosen != nullptr ? chosen->fit.values : std::vector<double>{};
+    if (replay.known_variance_of && chosen != nullptr) {
+      replay.known_variance = replay.known_variance_of(eval.model_with(selected, chosen_values), eval.nuisance());
+    }
+    if (eval.evaluate(selected, chosen_values, false, raw, false)) {
+      noise = estimate_noise(raw, w, replay.noise_x, replay.noise_floor, replay.known_variance);
       eval.set_sigma(row_sigma(noise, replay));
     }
     const std::vector<double> initial = chosen != nullptr ? chosen->fit.values : std::vector<double>{};
@@ -441,15 +491,18 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
       final.z = chosen->z;  // significance as selected
       final.size = chosen->size;
     }
+    final.rss_reference = nominal_fixed.rss;
+    final.bic_reference = nominal_fixed.bic;
   }
 
   for (std::size_t i = 0; i < singles.size(); ++i) {
-    result.candidates.push_back(score_of(singles[i], nominal_fixed.rss, nominal_fixed.bic));
+    result.candidates.push_back(score_of(singles[i]));
     if (!full[i]) result.candidates.back().label_note = "screened on the first " + std::to_string(screen) + " windows";
   }
-  for (const Fitted& f : pairs) result.candidates.push_back(score_of(f, nominal_fixed.rss, nominal_fixed.bic));
+  for (const Fitted& f : pairs) result.candidates.push_back(score_of(f));
+  // Best first: by BIC against the nominal model on the same stretch.
   std::sort(result.candidates.begin(), result.candidates.end(),
-            [](const CandidateScore& a, const CandidateScore& b) { return a.bic < b.bic; });
+            [](const CandidateScore& a, const CandidateScore& b) { return a.delta_bic < b.delta_bic; });
 
   // 6. What remains, and the tests for what the library does not hold.
   const std::size_t effect_params = param_count(selected);
@@ -489,7 +542,7 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     const MisfitTest& m = *first_misfit;
     result.verdict = Verdict::kUnexplained;
     std::string best = "none";
-    if (chosen != nullptr) best = score_of(final, nominal_fixed.rss, nominal_fixed.bic).label() + " (named nothing: it leaves this behind)";
+    if (chosen != nullptr) best = score_of(final).label() + " (named nothing: it leaves this behind)";
     result.summary = "Unexplained residual (" + title + "): " + m.channel + " " + m.label + " (" +
                      fmt(m.z, 3) + " sigma, " + fmt(m.size, 2) + " noise sigmas) after the best library candidate " +
                      best + ".";
@@ -510,7 +563,7 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
                      fmt(options.min_z_name, 2) + ", or too small to matter).";
   } else {
     result.verdict = Verdict::kNamed;
-    const CandidateScore s = score_of(final, nominal_fixed.rss, nominal_fixed.bic);
+    const CandidateScore s = score_of(final);
     std::size_t i = 0;
     for (std::size_t e = 0; e < selected.size(); ++e) {
       const Candidate& c = *selected[e];
@@ -519,10 +572,25 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
       fe.limits = c.target == Candidate::Target::kLimits;
       fe.keys = c.keys;
       fe.z = e < final.z.size() ? final.z[e] : 0.0;
-      for (std::size_t k = 0; k < c.params.size(); ++k, ++i) {
+      fe.inverse = c.inverse;
+      const std::size_t first = i;
+      const std::size_t m = c.params.size();
+      const std::size_t p = final.fit.values.size();
+      fe.fit_covariance.assign(m * m, 0.0);
+      for (std::size_t k = 0; k < m; ++k, ++i) {
         fe.values.push_back(s.values[i]);
         fe.sigmas.push_back(s.sigmas[i]);
+        fe.fit_values.push_back(final.fit.values[i]);
+        for (std::size_t l = 0; l < m; ++l) {
+          fe.fit_covariance[k * m + l] = final.fit.covariance.empty() ? 0.0 : final.fit.covariance[(first + k) * p + first + l];
+        }
+        const double res = c.fit_resolution(k, final.fit.values[i]);
+        fe.fit_covariance[k * m + k] += res * res;
+        const double partial = std::sqrt(std::max(fe.fit_covariance[k * m + k], 0.0));
+        fe.partial_sigmas.push_back(c.inverse[k] ? c.sigma(k, final.fit.values[i], partial) : partial);
       }
+      std::vector<double> zero(m, 0.0);
+      (void)mahalanobis_squared(zero, fe.fit_covariance, fe.observable_combinations);
       result.named.push_back(fe);
     }
     result.augmented = eval.model_with(selected, final.fit.values);

@@ -25,9 +25,12 @@ json effects_json(const std::vector<FittedEffect>& effects, Question q) {
   for (const auto& e : effects) {
     json params = json::object();
     for (std::size_t i = 0; i < e.keys.size(); ++i) {
-      params[e.keys[i]] = {{"value", number(e.values[i])}, {"sigma", number(e.sigmas[i])}};
+      params[e.keys[i]] = {{"value", number(e.values[i])},
+                           {"sigma", number(e.sigmas[i])},
+                           {"sigma_of_observable_part", number(e.partial_sigmas[i])}};
     }
     out.push_back({{"name", e.name},
+                   {"observable_combinations", e.observable_combinations},
                    {"question", question_name(q)},
                    {"section", e.limits ? "limits" : "effects"},
                    {"z", number(e.z)},
@@ -207,13 +210,26 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
   md << "## " << question_title(q.question) << ": " << verdict_name(q.verdict) << "\n\n" << q.summary << "\n\n";
   if (!q.named.empty()) {
     md << "| effect | parameter | value | 1 sigma | significance |\n|---|---|---|---|---|\n";
+    bool partial = false;
     for (const auto& e : q.named) {
       for (std::size_t i = 0; i < e.keys.size(); ++i) {
+        const bool alone = std::isfinite(e.sigmas[i]);
+        partial = partial || !alone;
         md << "| " << e.name << " | " << (e.limits ? "limits." : "") << e.keys[i] << " | "
-           << fmt(e.values[i], 6) << " | " << fmt(e.sigmas[i], 2) << " | " << fmt(e.z, 3) << " sigma |\n";
+           << fmt(e.values[i], 6) << " | " << (alone ? fmt(e.sigmas[i], 2) : fmt(e.partial_sigmas[i], 2) + " *")
+           << " | " << fmt(e.z, 3) << " sigma |\n";
       }
     }
     md << "\n";
+    if (partial) {
+      md << "\\* Not observable alone: the run fixes only some combinations of these parameters (";
+      for (const auto& e : q.named) {
+        if (e.observable_combinations < e.keys.size()) {
+          md << e.name << ": " << e.observable_combinations << " of " << e.keys.size() << "; ";
+        }
+      }
+      md << "the rest stay at the model's values); the sigma is that of the part the run fixes.\n\n";
+    }
   }
   md << "| channel | unit | noise (1 sigma) | RMS before | RMS after | shrink | whitened RMS before -> after |\n"
      << "|---|---|---|---|---|---|---|\n";

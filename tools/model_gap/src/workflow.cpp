@@ -214,12 +214,15 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
                                                  : nominal.sensors.wheel_encoder_counts_per_rev));
       for (std::size_t j = 0; j < w; ++j) cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
     }
+    cq.known_variance_of = [&commands](const RobotModel& model, std::span<const double> nuisance) {
+      return commands.timing_variance(model, nuisance.empty() ? 0.0 : nuisance[0]);
+    };
     cq.accel = accel;
     cq.start_yaw_rad = start_yaw;
     cq.wheel_sin_change = motion.wheel_sin_change;
     cq.wheel_cos_change = motion.wheel_cos_change;
     result.command = analyse_question(Question::kCommandToMotion, command_base, cq,
-                                      candidate_library(command_base, Question::kCommandToMotion, peaks),
+                                      candidate_library(command_base, Question::kCommandToMotion, peaks, row),
                                       options.question);
     result.command_delay_s = result.command.nuisance.empty() ? 0.0 : result.command.nuisance[0];
     if (result.command.verdict == Verdict::kNamed) result.augmented = result.command.augmented;

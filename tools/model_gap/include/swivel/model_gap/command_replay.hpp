@@ -9,19 +9,20 @@
 // (SimOptions::move_body), which makes this replay cheap enough to fit. The whole robot is
 // replayed only for the report's path (path()).
 //
-// Logged commands are samples of a signal that may change between rows (a drive ramps at
-// its own rate): the replay interpolates them linearly (first-order hold) at every
-// integration sub-step, and takes them `command_delay_s` late, a timing nuisance fitted from
-// the data beside the effects.
+// Logged commands are samples of a signal that may change between rows. A row's command is
+// taken to hold from halfway to the row before to halfway to the row after: for a signal
+// that ramps this is as good as interpolating, and a step (a new setpoint) is as likely to
+// have come early as late in its row, where interpolation would start every step half a row
+// early and the robot's limiter would carry that lead through its whole ramp. The replay
+// takes the commands `command_delay_s` late, a timing nuisance fitted beside the effects;
+// what remains of each step's unknown instant is noise, which timing_variance() measures.
 //
 // A caster steers itself towards trailing its motion: the steering law phi_dot =
 // (n . v_s) / d - w pulls a trailing caster back at |v_s| / d (25 /s at 0.5 m/s on a 2 cm
 // offset) and pushes a leading one away as fast. Where a caster leads (swinging through a
 // reversal), which way and how fast it turns hangs on its angle to within less than the
 // encoder count the log resolves, so such windows are not compared. Elsewhere the replayed
-// caster runs free, and one that parts from its measured angle by more than a few counts is
-// put back on it at the next row; steering is compared row by row, a window's steering
-// residual being the sum of its rows' prediction errors.
+// caster runs free, as the robot's did, and trailing pulls both back into line.
 //
 // Channels, per window: replay.wheel_<l|r|i>_rad (wheel rotation), replay.steer_<i>_rad
 // (steering rotation, swpc).
@@ -39,7 +40,7 @@ namespace swivel::model_gap {
 class CommandReplay {
  public:
   /// Largest command delay a fit may try, either way, as a multiple of the row period.
-  static constexpr double kMaxCommandDelayRows = 1.5;
+  static constexpr double kMaxCommandDelayRows = 1.0;
 
   /// Uses the windows and motion-capture anchors of `sensors` (same run), and its nominal
   /// dead-reckoned path `path` (one pose per row) for the casters' motion.
@@ -60,6 +61,11 @@ class CommandReplay {
   bool residuals(const RobotModel& model, double command_delay_s, std::vector<double>& out,
                  std::size_t window_limit = static_cast<std::size_t>(-1)) const;
 
+  /// Variance each window's residual gets (channel-major) from not knowing when within its
+  /// row each change of the commands came: the change of the residuals when every command
+  /// is taken half a row earlier or later, (r+ - r-)^2 / 12 (a uniform instant).
+  [[nodiscard]] std::vector<double> timing_variance(const RobotModel& model, double command_delay_s) const;
+
   /// The replayed robot's true pose at every row, from the run's start pose.
   void path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const;
 
@@ -67,7 +73,7 @@ class CommandReplay {
   struct Track {
     std::vector<Pose2> pose;  // unwrapped heading (with the body moving)
     std::vector<std::vector<double>> wheel;
-    std::vector<std::vector<double>> steer;  // per row: predicted turn in the row
+    std::vector<std::vector<double>> steer;  // per row: turn in the row
   };
   bool simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
                 bool move_body, Track& track) const;

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -26,6 +27,9 @@ struct ParamSpec {
   double scale = 1.0;
   double lower = -1e300;
   double upper = 1e300;
+  /// Where a combination of parameters the run cannot fix is left (the nominal model's own
+  /// value); NaN: at `initial`.
+  double anchor = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Whitened residual rows for parameter values `theta` (same order as the specs); NaN for a
@@ -54,6 +58,7 @@ struct FitOutcome {
   /// 1-sigma as if the rows were independent, s^2 (J'J)^-1: sigmas / naive_sigmas is how
   /// much the residuals' correlation widens each parameter's uncertainty.
   std::vector<double> naive_sigmas;
+  std::vector<double> naive_covariance;  ///< p x p row-major, observable subspace
   std::vector<double> covariance;   ///< p x p row-major, observable subspace only
   std::vector<char> observable;     ///< per parameter
   double rss = 0.0;
@@ -69,7 +74,10 @@ double bic(double rss, std::size_t n, std::size_t k);
 /// Scores fixed parameter values (no fitting): rss, bic with k = theta.size().
 FitOutcome score(const FitProblem& problem, std::span<const double> theta);
 
-/// Fits `specs` by Levenberg-Marquardt.
+/// Fits `specs` by Levenberg-Marquardt. Combinations of parameters the run hardly informs
+/// (information below 1/1000 of the best-informed combination's: the residuals barely move
+/// along them, so what little moves them is as likely the replay's own approximation as the
+/// robot) are put back at their anchors and reported as not observable.
 FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                const FitOptions& options = {});
 

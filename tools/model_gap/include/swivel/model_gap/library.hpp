@@ -34,12 +34,19 @@ struct Candidate {
   std::vector<ParamSpec> params;  ///< in fit units; name = "<name>.<key>"
   std::vector<double> identity;   ///< fit units: the nominal model's own value
   std::vector<char> inverse;      ///< fitted as 1 / value
+  /// Per parameter, in model units: what the replay cannot resolve, added in quadrature to
+  /// the statistical uncertainty (0: nothing). A lag trades against when in its row the log
+  /// caught each command (a row period over sqrt 12); a limit against the replay's sub-step
+  /// (about 1 % of the limit).
+  std::vector<double> resolution;
 
   /// Writes fit-unit values into `model` (effects or limits).
   void apply(RobotModel& model, std::span<const double> theta) const;
   /// Reported value of parameter i and its standard deviation, from fit units.
   [[nodiscard]] double value(std::size_t i, double fit) const;
   [[nodiscard]] double sigma(std::size_t i, double fit, double fit_sigma) const;
+  /// Resolution of parameter i in fit units at fit value `fit` (0: none).
+  [[nodiscard]] double fit_resolution(std::size_t i, double fit) const;
 };
 
 /// What the run shows of the robot's motion, for the limits' starting values.
@@ -49,8 +56,13 @@ struct MotionPeaks {
   double steer_rate_radps = 0.0;     ///< high percentile of the measured steering rates
 };
 
-/// Every candidate of `question` that applies to the model's drivetrain.
+/// The question a candidate belongs to, by name (e.g. "slip" -> sensor to pose,
+/// "accel_limit" -> command to motion). @throws std::invalid_argument for an unknown name.
+Question question_of(const std::string& candidate);
+
+/// Every candidate of `question` that applies to the model's drivetrain; `row_period_s` is
+/// the run's (for the lags' resolution).
 std::vector<Candidate> candidate_library(const RobotModel& nominal, Question question,
-                                         const MotionPeaks& peaks);
+                                         const MotionPeaks& peaks, double row_period_s = 0.01);
 
 }  // namespace swivel::model_gap

@@ -64,6 +64,11 @@ struct QuestionReplay {
   std::vector<double> own_change;               ///< channel-major, for the misfit tests
   std::vector<std::vector<double>> noise_x;     ///< [channel][window], NoiseModel's x
   std::vector<double> noise_floor;              ///< per channel, variance
+  /// Channel-major variance the replay itself adds in each window for a model and nuisance
+  /// values (unset: none), e.g. from not knowing when in its row a step of the commands came.
+  /// Measured first on the base model, then again on the selection.
+  std::function<std::vector<double>(const RobotModel& model, std::span<const double> nuisance)> known_variance_of;
+  std::vector<double> known_variance;  ///< the current one (set by analyse_question)
   std::vector<double> accel;                    ///< per window
   std::vector<double> start_yaw_rad;            ///< per window
   std::vector<std::vector<double>> wheel_sin_change;
@@ -77,7 +82,15 @@ struct FittedEffect {
   std::vector<std::string> keys;
   std::vector<double> values;
   std::vector<double> sigmas;     ///< one standard deviation (infinite: not observable alone)
+  /// One standard deviation of what the run fixes of each parameter (its part in the
+  /// observable combinations); equals sigmas where a parameter is observable alone.
+  std::vector<double> partial_sigmas;
+  std::size_t observable_combinations = 0;  ///< of keys.size(); the rest left at the model's values
   double z = 0.0;                 ///< significance against the nominal model's values
+  // In fit units (limits as 1 / limit), for checks against a known truth.
+  std::vector<double> fit_values;
+  std::vector<double> fit_covariance;  ///< row-major, resolution included, observable subspace
+  std::vector<char> inverse;           ///< per key: fitted as 1 / value
 };
 
 /// One candidate (a single effect or a pair) after fitting.

@@ -26,7 +26,6 @@
 // processes, off by default. Same model, options and call sequence -> same output.
 
 #include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <random>
@@ -91,11 +90,6 @@ class World {
   [[nodiscard]] const Twist2& true_twist() const noexcept { return twist_; }
   /// True steering angle of module i (swpc), unwrapped, rad.
   [[nodiscard]] double true_steer_rad(std::size_t i) const noexcept { return modules_[i].phi_rad; }
-  /// Real-time safe. Puts module i's caster at true steering angle `phi_rad` (its steering
-  /// rate and everything else unchanged): a replay that keeps to measured angles.
-  void set_true_steer_rad(std::size_t i, double phi_rad) noexcept {
-    if (i < n_ && std::isfinite(phi_rad)) modules_[i].phi_rad = phi_rad;
-  }
   /// True steering rate of module i over the last sub-step, rad/s.
   [[nodiscard]] double true_steer_rate_radps(std::size_t i) const noexcept {
     return modules_[i].steer_rate_radps;
