@@ -103,6 +103,24 @@ TEST(TwistLimiter, ReadsTheRobotModelsLimitsPerAxis) {
   EXPECT_FALSE(TwistLimiter(MotionLimits{}).active());
 }
 
+TEST(TwistLimiter, ContinuesFromAnotherLimitersVelocityAndAcceleration) {
+  MotionLimits moving;
+  moving.linear_acceleration_mps2 = 1.0;
+  moving.linear_jerk_mps3 = 10.0;
+  MotionLimits stopping = moving;
+  stopping.linear_acceleration_mps2 = 0.5;
+  TwistLimiter a(moving);
+  TwistLimiter b(stopping);
+  for (int k = 0; k < 150; ++k) (void)a.step(Twist2{1.0, 0.0, 0.0}, kDt);
+  const double v = a.value().vx_mps;  // still accelerating at 1 m/s^2
+  b.continue_from(a);
+  EXPECT_EQ(b.value().vx_mps, v);
+  // The acceleration came along: it falls at the jerk limit instead of jumping to zero.
+  const double next = b.step(Twist2{}, kDt).vx_mps;
+  EXPECT_GT(next - v, 0.0);
+  EXPECT_NEAR((next - v) / kDt, 1.0 - 10.0 * kDt, 1e-9);
+}
+
 TEST(TwistLimiter, StepsWithoutAllocating) {
   MotionLimits limits;
   limits.linear_acceleration_mps2 = 0.5;

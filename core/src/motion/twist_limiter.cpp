@@ -79,6 +79,12 @@ void TwistLimiter::reset(const Twist2& current) noexcept {
   wz_.reset(current.wz_radps);
 }
 
+void TwistLimiter::continue_from(const TwistLimiter& other) noexcept {
+  x_.reset(other.x_.value(), other.x_.acceleration());
+  y_.reset(other.y_.value(), other.y_.acceleration());
+  wz_.reset(other.wz_.value(), other.wz_.acceleration());
+}
+
 Twist2 TwistLimiter::value() const noexcept { return Twist2{x_.value(), y_.value(), wz_.value()}; }
 
 bool TwistLimiter::active() const noexcept { return x_.active() || wz_.active(); }

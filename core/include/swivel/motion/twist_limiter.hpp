@@ -56,6 +56,10 @@ class TwistLimiter {
   /// Advances by `dt_s` towards `target` and returns the limited twist.
   Twist2 step(const Twist2& target, double dt_s) noexcept;
   void reset(const Twist2& current = {}) noexcept;
+  /// Takes over `other`'s state (velocities and accelerations), so that switching between
+  /// two sets of limits, e.g. from a command's to a controlled stop's, keeps the motion
+  /// continuous.
+  void continue_from(const TwistLimiter& other) noexcept;
 
   [[nodiscard]] Twist2 value() const noexcept;
   /// Whether any limit applies (otherwise step() returns its target).
