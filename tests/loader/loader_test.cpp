@@ -6,6 +6,7 @@
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/plugin/drivetrain.hpp"
+#include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/plugin_loader.hpp"
 
@@ -94,7 +95,22 @@ TEST(PluginLoader, NotFoundListsEveryDirectorySearched) {
 
 TEST(PluginLoader, RefusesWrongAbiVersion) {
   EXPECT_EQ(error_of("bad_abi"),
-            file_of("bad_abi") + ": ABI version 999, expected 1 (rebuild the plugin)");
+            file_of("bad_abi") + ": ABI version 999, expected 2 (built for a newer Swivel: "
+                                 "rebuild the plugin against this one's headers)");
+}
+
+// ABI 2 added the hardware lifecycle hooks; a hardware plugin built before them would be
+// called through a vtable without them.
+TEST(PluginLoader, RefusesHardwarePluginOfTheAbiBeforeTheLifecycleHooks) {
+  PluginLoader loader({kDir});
+  try {
+    (void)loader.create<Hardware>("old_abi");
+    FAIL() << "no error";
+  } catch (const PluginError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              kDir + "/swivel_hardware_old_abi.so: ABI version 1, expected 2 (built for an "
+                     "older Swivel: rebuild the plugin against this one's headers)");
+  }
 }
 
 TEST(PluginLoader, RefusesWrongKind) {

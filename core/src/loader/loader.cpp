@@ -148,8 +148,10 @@ std::shared_ptr<PluginLibrary> PluginLoader::open_file(std::uint32_t kind,
   const SwivelPluginDescriptor* d = entry();
   if (d == nullptr) throw PluginError(file + ": entry point returned no descriptor");
   if (d->abi_version != SWIVEL_PLUGIN_ABI_VERSION) {
+    const char* which = d->abi_version < SWIVEL_PLUGIN_ABI_VERSION ? "an older" : "a newer";
     throw PluginError(file + ": ABI version " + std::to_string(d->abi_version) + ", expected " +
-                      std::to_string(SWIVEL_PLUGIN_ABI_VERSION) + " (rebuild the plugin)");
+                      std::to_string(SWIVEL_PLUGIN_ABI_VERSION) + " (built for " + which +
+                      " Swivel: rebuild the plugin against this one's headers)");
   }
   if (d->kind != kind) {
     throw PluginError(file + ": kind '" + plugin_kind_name(d->kind) + "', expected '" +

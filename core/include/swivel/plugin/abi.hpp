@@ -6,8 +6,12 @@
 //
 // The one C entry point every plugin library exports. The host dlopen()s a library, looks
 // up `swivel_plugin_descriptor`, and checks abi_version (first field, always) and kind
-// before calling anything else. Bump kSwivelPluginAbiVersion whenever a plugin interface
+// before calling anything else. Bump SWIVEL_PLUGIN_ABI_VERSION whenever a plugin interface
 // or a type in swivel/types.hpp changes layout.
+//
+// ABI versions:
+//   1  the first plugin interfaces
+//   2  Hardware gains the lifecycle hooks activate(), deactivate() and on_error()
 
 #include <array>
 #include <cstdint>
@@ -16,7 +20,7 @@
 
 extern "C" {
 
-#define SWIVEL_PLUGIN_ABI_VERSION 1u
+#define SWIVEL_PLUGIN_ABI_VERSION 2u
 #define SWIVEL_PLUGIN_ENTRY_POINT "swivel_plugin_descriptor"
 
 enum SwivelPluginKind : std::uint32_t {
