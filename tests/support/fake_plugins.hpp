@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -28,7 +29,12 @@ class FakeHardware final : public Hardware {
 
   void configure(const PluginContext&) override {}
 
+  void on_error(const char* /*cause*/) noexcept override {
+    on_errors.fetch_add(1, std::memory_order_relaxed);
+  }
+
   Status read(double stamp_s, HardwareState& out) noexcept override {
+    reads.fetch_add(1, std::memory_order_relaxed);
     if (fail_read.load(std::memory_order_relaxed)) return Status::kError;
     if (has_stamp_) {
       const double dt = stamp_s - stamp_s_;
@@ -73,7 +79,9 @@ class FakeHardware final : public Hardware {
 
   std::atomic<double> last_left_radps{0.0};  ///< last written setpoints
   std::atomic<double> last_right_radps{0.0};
+  std::atomic<std::uint64_t> reads{0};
   std::atomic<std::uint64_t> writes{0};
+  std::atomic<std::uint64_t> on_errors{0};  ///< on_error() calls
 
  private:
   double angle_[2] = {0.0, 0.0};
@@ -88,6 +96,8 @@ class FakeHardware final : public Hardware {
 class FakeDrivetrain final : public Drivetrain {
  public:
   std::atomic<bool> fail_forward{false};
+  /// inverse() scales the twist down to this forward speed, as wheel limits would.
+  std::atomic<double> max_speed_mps{std::numeric_limits<double>::infinity()};
 
   void configure(const PluginContext&) override {}
   [[nodiscard]] std::uint32_t module_count() const noexcept override { return 2; }
@@ -109,8 +119,12 @@ class FakeDrivetrain final : public Drivetrain {
     return Status::kOk;
   }
 
-  Status inverse(const Twist2& command, const HardwareState&, double, ActuatorCommand& out,
+  Status inverse(const Twist2& requested, const HardwareState&, double, ActuatorCommand& out,
                  Twist2& applied) noexcept override {
+    const double max_speed = max_speed_mps.load(std::memory_order_relaxed);
+    const double scale =
+        std::abs(requested.vx_mps) > max_speed ? max_speed / std::abs(requested.vx_mps) : 1.0;
+    const Twist2 command{requested.vx_mps * scale, 0.0, requested.wz_radps * scale};
     out = ActuatorCommand{};
     out.module_count = 2;
     const double half = command.wz_radps * kFakeTrackWidthM / 2.0;
@@ -142,11 +156,16 @@ class FakeLocalization final : public Localization {
   std::atomic<bool> allocate_in_update{false};  ///< update() grows a vector (a planted bug)
   std::atomic<bool> malloc_in_update{false};    ///< update() calls malloc/free directly
   std::atomic<bool> throw_in_update{false};     ///< update() throws (a plugin breaking the rules)
+  std::atomic<bool> refuse_hand_over{false};    ///< hand_over() returns kError
 
   void configure(const PluginContext&) override {}
   void reset(const PoseEstimate& initial) override { estimate_ = initial; }
 
   Status hand_over(const PoseEstimate& current) noexcept override {
+    if (refuse_hand_over.load(std::memory_order_relaxed)) {
+      error_ = "fake hand-over refusal";
+      return Status::kError;
+    }
     estimate_.pose = current.pose;
     if (current.has_covariance) {
       estimate_.covariance = current.covariance;
@@ -165,7 +184,10 @@ class FakeLocalization final : public Localization {
     if (readings.motion_capture.valid) {
       last_motion_capture_x_m.store(readings.motion_capture.pose.x_m, std::memory_order_relaxed);
     }
-    if (fail_update.load(std::memory_order_relaxed)) return Status::kError;
+    if (fail_update.load(std::memory_order_relaxed)) {
+      error_ = "fake update failure";
+      return Status::kError;
+    }
     if (allocate_in_update.load(std::memory_order_relaxed)) {
       try {
         history_.push_back(estimate_.pose);  // grows: allocates now and then
@@ -189,7 +211,7 @@ class FakeLocalization final : public Localization {
   }
 
   [[nodiscard]] PoseEstimate estimate() const noexcept override { return estimate_; }
-  [[nodiscard]] const char* last_error() const noexcept override { return "fake update failure"; }
+  [[nodiscard]] const char* last_error() const noexcept override { return error_; }
 
   std::atomic<std::uint64_t> updates{0};
   std::atomic<std::uint64_t> hand_overs{0};
@@ -198,6 +220,7 @@ class FakeLocalization final : public Localization {
  private:
   PoseEstimate estimate_;
   std::vector<Pose2> history_;
+  const char* error_ = "";
 };
 
 }  // namespace swivel::test

@@ -5,6 +5,7 @@
 #include <span>
 #include <stdexcept>
 #include <system_error>
+#include <time.h>
 
 namespace swivel::rt {
 namespace {
@@ -47,6 +48,30 @@ bool finite(const MotionCaptureSample& m) noexcept {
   return finite(m.stamp_s) && finite(m.pose);
 }
 
+bool all_zero(const ActuatorCommand& c) noexcept {
+  for (std::uint32_t i = 0; i < c.module_count && i < kMaxModules; ++i) {
+    if (c.wheel_rate_radps[i] != 0.0 || c.steer_rate_radps[i] != 0.0) return false;
+  }
+  return true;
+}
+
+// The controlled stop: the model's limits, with the stop's deceleration on the axes whose
+// model has no acceleration limit.
+MotionLimits stop_limits(const LoopOptions& options) {
+  MotionLimits limits = options.limits;
+  if (!limits.linear_acceleration_mps2) {
+    limits.linear_acceleration_mps2 = options.stop_linear_deceleration_mps2;
+  }
+  if (!limits.angular_acceleration_radps2) {
+    limits.angular_acceleration_radps2 = options.stop_angular_deceleration_radps2;
+  }
+  return limits;
+}
+
+// Below these a drivetrain may fade a small twist out on purpose (swpc near standstill).
+constexpr double kFollowFloorMps = 0.02;
+constexpr double kFollowFloorRadps = 0.02;
+
 }  // namespace
 
 ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
@@ -59,7 +84,9 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
       active_localization_(&localization),
       timing_(1.0 / options.rate_hz),
-      odometry_monitor_(options.odometry_check) {
+      odometry_monitor_(options.odometry_check),
+      command_limiter_(options.limits),
+      stop_limiter_(stop_limits(options)) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
     throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
                                 std::to_string(options.rate_hz));
@@ -72,6 +99,13 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
     throw std::invalid_argument(
         "odometry_check: gyro_disagreement_radps, residual_limit_mps, filter_time_constant_s "
         "and persistence_s must be finite and positive, gyro_disagreement_fraction >= 0");
+  }
+  if (!(options.stop_linear_deceleration_mps2 > 0.0) ||
+      !(options.stop_angular_deceleration_radps2 > 0.0)) {
+    throw std::invalid_argument(
+        "controlled stop decelerations must be positive (infinite: stop at once), got " +
+        std::to_string(options.stop_linear_deceleration_mps2) + " m/s^2 and " +
+        std::to_string(options.stop_angular_deceleration_radps2) + " rad/s^2");
   }
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
@@ -164,8 +198,54 @@ bool ControlLoop::request_localization_swap(Localization* next, const char* name
   return true;
 }
 
-Localization* ControlLoop::take_retired_localization() noexcept {
-  return retired_localization_.exchange(nullptr, std::memory_order_acq_rel);
+Localization* ControlLoop::take_retired_localization(SwapOutcome* outcome) noexcept {
+  Localization* retired = retired_localization_.exchange(nullptr, std::memory_order_acq_rel);
+  // Written by the loop before it published `retired`; the next swap cannot be requested
+  // before this thread took it.
+  if (retired != nullptr && outcome != nullptr) *outcome = retired_outcome_swap_;
+  return retired;
+}
+
+void ControlLoop::request_clear(std::uint64_t id) noexcept {
+  LoopRequest request;
+  request.kind = LoopRequest::Kind::kClear;
+  request.id = id;
+  (void)requests_.publish(request);
+}
+
+void ControlLoop::request_set_pose(const PoseEstimate& pose, std::uint64_t id) noexcept {
+  LoopRequest request;
+  request.kind = LoopRequest::Kind::kSetPose;
+  request.id = id;
+  request.pose = pose;
+  (void)requests_.publish(request);
+}
+
+bool ControlLoop::pause_hardware(double timeout_s) noexcept {
+  hardware_access_.store(HardwareAccess::kPauseRequested, std::memory_order_release);
+  const double deadline_s = monotonic_s() + timeout_s;
+  for (;;) {
+    const HardwareAccess access = hardware_access_.load(std::memory_order_acquire);
+    if (access == HardwareAccess::kPaused) return true;
+    if (access == HardwareAccess::kPauseRefused) break;
+    if (monotonic_s() >= deadline_s) {
+      HardwareAccess expected = HardwareAccess::kPauseRequested;
+      if (hardware_access_.compare_exchange_strong(expected, HardwareAccess::kCalling,
+                                                   std::memory_order_acq_rel)) {
+        return false;
+      }
+      if (expected == HardwareAccess::kPaused) return true;  // granted just now
+      break;
+    }
+    const timespec pause{0, 200000};
+    nanosleep(&pause, nullptr);
+  }
+  hardware_access_.store(HardwareAccess::kCalling, std::memory_order_release);
+  return false;
+}
+
+void ControlLoop::resume_hardware() noexcept {
+  hardware_access_.store(HardwareAccess::kCalling, std::memory_order_release);
 }
 
 bool ControlLoop::start_calibration(Calibration* calibration) noexcept {
@@ -216,7 +296,9 @@ void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail, 
   cycle_fault_ = code;
   if (latched_fault_ == code) return;  // the same cause persisting is one event
   latched_fault_ = code;
-  copy_text(detail != nullptr ? detail : fault_code_name(code), latched_detail_);
+  // A plugin that gives no reason still leaves a cause to show.
+  copy_text(detail != nullptr && detail[0] != '\0' ? detail : fault_code_name(code),
+            latched_detail_);
   ++state_.fault_count;
   log_event(LogLevel::kError, LogCode::kFaultRaised, now_s, "safe stop", static_cast<double>(code),
             static_cast<double>(state_.fault_count), value, limit, detail);
@@ -278,6 +360,23 @@ void ControlLoop::take_pending_swap(double now_s) noexcept {
   const PoseEstimate handed = outgoing->estimate();
   const char* thrown = nullptr;
   const Status status = guarded([&] { return next->hand_over(handed); }, thrown);
+  if (status != Status::kOk) {
+    // Roll back: the outgoing instance still holds a valid estimate and stays active; the
+    // refused one goes back to the swapping thread. No fault: the robot lost nothing.
+    retired_outcome_swap_.taken = false;
+    copy_text(thrown != nullptr ? thrown : next->last_error(), retired_outcome_swap_.refusal);
+    if (retired_outcome_swap_.refusal[0] == '\0') {
+      copy_text("hand_over failed without a reason", retired_outcome_swap_.refusal);
+    }
+    retired_localization_.store(next, std::memory_order_release);
+    pending_localization_.store(nullptr, std::memory_order_release);
+    log_event(LogLevel::kWarn, LogCode::kLocalizationSwapRefused, now_s, "",
+              static_cast<double>(state_.localization_swaps), 0.0, 0.0, 0.0,
+              retired_outcome_swap_.refusal.data());
+    return;
+  }
+  retired_outcome_swap_.taken = true;
+  retired_outcome_swap_.refusal[0] = '\0';
   active_localization_.exchange(next, std::memory_order_acq_rel);
   state_.localization_plugin = pending_name_;
   ++state_.localization_swaps;
@@ -287,9 +386,6 @@ void ControlLoop::take_pending_swap(double now_s) noexcept {
   log_event(LogLevel::kInfo, LogCode::kLocalizationSwapped, now_s, "",
             static_cast<double>(state_.localization_swaps), handed.pose.x_m, handed.pose.y_m,
             handed.pose.yaw_rad, state_.localization_plugin.data());
-  if (status != Status::kOk) {
-    raise_fault(FaultCode::kLocalizationError, now_s, thrown != nullptr ? thrown : next->last_error());
-  }
 }
 
 void ControlLoop::take_pending_calibration(double now_s) noexcept {
@@ -297,8 +393,8 @@ void ControlLoop::take_pending_calibration(double now_s) noexcept {
   Calibration* next = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel);
   if (next == nullptr) return;
   active_calibration_.store(next, std::memory_order_release);
-  if (latched_fault_ != FaultCode::kNone) {
-    // A robot in safe stop must be cleared before anything moves it.
+  if (latched_fault_ != FaultCode::kNone || stopping_) {
+    // A robot in safe stop must be cleared before anything moves it; one shutting down stays.
     retire_calibration(CalibrationOutcome::kRefused, now_s);
     return;
   }
@@ -318,7 +414,7 @@ void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) n
             LogCode::kMessage, now_s,
             outcome == CalibrationOutcome::kFinished    ? "calibration finished"
             : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
-            : outcome == CalibrationOutcome::kRefused   ? "calibration refused: fault latched"
+            : outcome == CalibrationOutcome::kRefused   ? "calibration refused: fault latched or stopping"
                                                         : "calibration stopped by a fault");
 }
 
@@ -360,19 +456,169 @@ void ControlLoop::run_cycle(double now_s) noexcept {
   cycle(now_s, false);
 }
 
+// True while the hardware must not be called (pause_hardware()). Grants a pause only to a
+// robot in safe stop whose last setpoints were zero; a requester that gave up meanwhile
+// wins the exchange and the loop goes on calling the hardware.
+bool ControlLoop::hold_hardware() noexcept {
+  HardwareAccess access = hardware_access_.load(std::memory_order_acquire);
+  if (access == HardwareAccess::kPauseRequested) {
+    if (latched_fault_ == FaultCode::kNone) {
+      (void)hardware_access_.compare_exchange_strong(access, HardwareAccess::kPauseRefused,
+                                                     std::memory_order_acq_rel);
+      return false;
+    }
+    if (!last_write_zero_) return false;  // still stopping: granted once at rest
+    if (hardware_access_.compare_exchange_strong(access, HardwareAccess::kPaused,
+                                                 std::memory_order_acq_rel)) {
+      access = HardwareAccess::kPaused;
+    }
+  }
+  if (access == HardwareAccess::kPaused) {
+    hardware_paused_ = true;
+    return true;
+  }
+  if (hardware_paused_) {
+    // The last reading is from before the pause: the next one starts the odometry afresh.
+    hardware_paused_ = false;
+    has_previous_ = false;
+  }
+  return false;
+}
+
+void ControlLoop::take_request(double now_s, std::uint64_t& clear_id) noexcept {
+  LoopRequest request;
+  if (!requests_.take(request)) return;
+  if (request.kind == LoopRequest::Kind::kClear) {
+    clear_id = request.id;  // answered once this cycle's checks have run
+    clear_pending_ = true;
+    return;
+  }
+  Localization& localization = *active_localization_.load(std::memory_order_relaxed);
+  LoopReply reply;
+  reply.id = request.id;
+  const char* thrown = nullptr;
+  if (!finite(request.pose.pose)) {
+    copy_text("non-finite pose", reply.detail);
+  } else if (guarded([&] { return localization.hand_over(request.pose); }, thrown) ==
+             Status::kOk) {
+    reply.ok = true;
+  } else {
+    copy_text(thrown != nullptr ? thrown : localization.last_error(), reply.detail);
+    if (reply.detail[0] == '\0') copy_text("hand_over failed without a reason", reply.detail);
+  }
+  if (reply.ok) {
+    log_event(LogLevel::kInfo, LogCode::kPoseSet, now_s, "", static_cast<double>(request.id),
+              request.pose.pose.x_m, request.pose.pose.y_m, request.pose.pose.yaw_rad);
+  } else {
+    log_event(LogLevel::kWarn, LogCode::kPoseRefused, now_s, "", static_cast<double>(request.id),
+              0.0, 0.0, 0.0, reply.detail.data());
+  }
+  (void)replies_.publish(reply);
+}
+
+// Leaves the latched fault (both clear paths).
+void ControlLoop::clear_latched_fault(double now_s) noexcept {
+  log_event(LogLevel::kInfo, LogCode::kFaultCleared, now_s, "",
+            static_cast<double>(latched_fault_));
+  latched_fault_ = FaultCode::kNone;
+  latched_detail_[0] = '\0';
+  state_.hardware_in_error = false;
+  has_command_ = false;  // only a command that arrives from now on moves the robot
+}
+
+void ControlLoop::answer_clear(std::uint64_t id, double now_s) noexcept {
+  LoopReply reply;
+  reply.id = id;
+  if (latched_fault_ != FaultCode::kNone) {
+    reply.fault = latched_fault_;
+    reply.detail = latched_detail_;
+    reply.ok = cycle_fault_ == FaultCode::kNone;
+    if (reply.ok) {
+      clear_latched_fault(now_s);
+    } else {
+      log_event(LogLevel::kWarn, LogCode::kClearRefused, now_s, "",
+                static_cast<double>(latched_fault_), static_cast<double>(id), 0.0, 0.0,
+                latched_detail_.data());
+    }
+  } else if (transient_fault_ != FaultCode::kNone) {
+    reply.fault = transient_fault_;
+    reply.detail = transient_detail_;
+    // A missing command stream persists until a command arrives, which resumes by itself.
+    reply.ok = transient_fault_ != FaultCode::kCommandTimeout;
+    if (reply.ok) transient_fault_ = FaultCode::kNone;
+  } else {
+    reply.ok = true;  // nothing to clear
+  }
+  (void)replies_.publish(reply);
+}
+
+Twist2 ControlLoop::limit(const Twist2& target, bool stopping, double now_s) noexcept {
+  motion::TwistLimiter& limiter = stopping ? stop_limiter_ : command_limiter_;
+  if (&limiter != limiter_) {
+    limiter.continue_from(*limiter_);
+    limiter_ = &limiter;
+  }
+  if (!limiter.active()) {
+    limiter.reset(target);
+    return target;
+  }
+  // The time that really passed, so that a late cycle does not stretch a stop; bounded so
+  // that a stall does not let the twist jump.
+  double dt_s = period_s_;
+  if (has_last_cycle_ && now_s > last_cycle_s_) dt_s = std::min(now_s - last_cycle_s_, 2.0 * period_s_);
+  return limiter.step(target, dt_s);
+}
+
+// The drivetrain scaled the twist down to its own wheel or steering limits: the limiter
+// continues from what the robot was commanded, so that a later stop ramps down from the
+// robot's speed and not from one it never reached. Below the floors a drivetrain may fade a
+// small twist out on purpose; following it there would keep the robot from ever starting.
+void ControlLoop::follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept {
+  const auto follow = [](motion::AxisLimiter& axis, double wanted, double got, double floor) {
+    if (std::abs(wanted) >= floor && std::abs(got) < std::abs(wanted) * (1.0 - 1e-9)) {
+      axis.reset(got);
+    }
+  };
+  follow(limiter_->x(), limited.vx_mps, applied.vx_mps, kFollowFloorMps);
+  follow(limiter_->y(), limited.vy_mps, applied.vy_mps, kFollowFloorMps);
+  follow(limiter_->wz(), limited.wz_radps, applied.wz_radps, kFollowFloorRadps);
+}
+
 void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   cycle_fault_ = FaultCode::kNone;
+  if (!final_stop && hold_hardware()) {
+    // Paused for a lifecycle call off the loop: no hardware call; the robot is stopped.
+    ++state_.cycle;
+    state_.stamp_s = now_s;
+    state_.odometry_twist = Twist2{};
+    state_.command_twist = Twist2{};
+    snapshot_.write(state_);
+    last_cycle_s_ = now_s;
+    has_last_cycle_ = true;
+    return;
+  }
+  if (!stopping_ && controlled_stop_requested_.load(std::memory_order_acquire)) {
+    stopping_ = true;
+    log_event(LogLevel::kInfo, LogCode::kMessage, now_s,
+              "controlled stop: commands ignored, bringing the robot to rest");
+  }
   take_pending_swap(now_s);
   take_pending_calibration(now_s);
+  std::uint64_t clear_id = 0;
+  clear_pending_ = false;
+  take_request(now_s, clear_id);
   Localization& localization = *active_localization_.load(std::memory_order_relaxed);
 
   // Read and check the hardware.
   bool reading_ok = false;
+  const char* hardware_failure = nullptr;  // cause of a hardware fault in this cycle
   const char* thrown = nullptr;
   if (guarded([&] { return hardware_.read(now_s, current_); }, thrown) != Status::kOk) {
-    raise_fault(FaultCode::kHardwareError, now_s, thrown != nullptr ? thrown : hardware_.last_error());
+    hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
+    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
   } else if (current_.module_count > kMaxModules) {
-    raise_fault(FaultCode::kHardwareError, now_s, "module count out of range");
+    hardware_failure = "module count out of range";
+    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
   } else if (const char* field = non_finite_field(current_); field != nullptr) {
     raise_fault(FaultCode::kNonFiniteSensor, now_s, field);
   } else {
@@ -416,20 +662,17 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
     if (latched_fault_ != FaultCode::kNone) {
       if (cycle_fault_ == FaultCode::kNone) {
-        log_event(LogLevel::kInfo, LogCode::kFaultCleared, now_s, "",
-                  static_cast<double>(latched_fault_));
-        latched_fault_ = FaultCode::kNone;
-        latched_detail_[0] = '\0';
-        has_command_ = false;  // only a command that arrives from now on moves the robot
+        clear_latched_fault(now_s);
       } else {
         clear_requested_.store(true, std::memory_order_release);
       }
     }
   }
+  if (clear_pending_) answer_clear(clear_id, now_s);
 
   // Newest velocity command (one per cycle at most: the slot keeps only the newest).
   VelocityCommand incoming;
-  if (commands_.take(incoming)) {
+  if (commands_.take(incoming) && !stopping_) {
     if (finite(incoming.twist) && finite(incoming.received_s)) {
       command_ = incoming;
       has_command_ = true;
@@ -441,18 +684,19 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
                 static_cast<double>(incoming.sequence));
     }
   }
+  if (stopping_) has_command_ = false;  // shutting down: no command moves the robot again
   if (has_command_ && now_s - command_.received_s > options_.command_timeout_s) {
     has_command_ = false;
     raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
   }
 
-  // Command -> setpoints -> hardware. A calibration writes module setpoints itself.
+  // Command -> limits -> setpoints -> hardware. A calibration writes module setpoints itself.
   const bool had_calibration = active_calibration_.load(std::memory_order_relaxed) != nullptr;
-  const bool calibrating = step_calibration(now_s, final_stop);
+  const bool calibrating = step_calibration(now_s, final_stop || stopping_);
   if (calibrating) has_command_ = false;  // velocity commands are ignored meanwhile
   Twist2 target;
   const bool moving =
-      !calibrating && !final_stop && latched_fault_ == FaultCode::kNone && has_command_;
+      !calibrating && !final_stop && !stopping_ && latched_fault_ == FaultCode::kNone && has_command_;
   if (moving) target = command_.twist;
   Twist2 applied;
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
@@ -462,7 +706,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     // whose state lags behind the procedure's setpoints.
     write_zero_setpoints();
   } else if (basis != nullptr && !calibrating) {
-    if (guarded([&] { return drivetrain_.inverse(target, *basis, period_s_, setpoints_, applied); },
+    // The final cycle stops at once: the daemon brings the robot to rest before it.
+    const Twist2 limited = final_stop ? Twist2{} : limit(target, !moving, now_s);
+    if (guarded([&] { return drivetrain_.inverse(limited, *basis, period_s_, setpoints_, applied); },
                 thrown) != Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
                   thrown != nullptr ? thrown : drivetrain_.last_error());
@@ -470,6 +716,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     } else if (!finite(setpoints_) || !finite(applied)) {
       raise_fault(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
       zeroed = true;
+    } else {
+      follow_drivetrain(limited, applied);
     }
   }
   if (zeroed) {
@@ -480,12 +728,30 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
                 "inverse kinematics failed: zero setpoints written");
     }
   }
+  if (calibrating || zeroed || final_stop || (had_calibration && !calibrating)) {
+    limiter_->reset(applied);  // the limits start again from what the robot was given
+  }
   if (guarded([&] { return hardware_.write(setpoints_); }, thrown) != Status::kOk) {
-    raise_fault(FaultCode::kHardwareError, now_s, thrown != nullptr ? thrown : hardware_.last_error());
+    hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
+    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
+  } else {
+    last_write_zero_ = all_zero(setpoints_);
   }
   if (reading_ok) {
     previous_ = current_;
     has_previous_ = true;
+  }
+  // The cycle's boundary: the hardware hears of its failure once, before the next read.
+  if (hardware_failure != nullptr && !state_.hardware_in_error) {
+    state_.hardware_in_error = true;
+    (void)guarded(
+        [&] {
+          hardware_.on_error(hardware_failure);
+          return Status::kOk;
+        },
+        thrown);
+    log_event(LogLevel::kWarn, LogCode::kMessage, now_s, "hardware error state: on_error() called",
+              0.0, 0.0, 0.0, 0.0, hardware_failure);
   }
 
   // Publish.
@@ -516,7 +782,10 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   state_.has_truth = hardware_.ground_truth(state_.truth);
   state_.wheel_angle_rad = current_.wheel_angle_rad;
   state_.steer_angle_rad = current_.steer_angle_rad;
+  state_.stopping = stopping_;
   snapshot_.write(state_);
+  last_cycle_s_ = now_s;
+  has_last_cycle_ = true;
 }
 
 }  // namespace swivel::rt

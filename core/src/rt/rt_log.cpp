@@ -28,6 +28,10 @@ const char* log_code_name(LogCode code) noexcept {
     case LogCode::kLocalizationSwapped: return "localization_swapped";
     case LogCode::kZeroSetpointFallback: return "zero_setpoint_fallback";
     case LogCode::kMessage: return "message";
+    case LogCode::kLocalizationSwapRefused: return "localization_swap_refused";
+    case LogCode::kPoseSet: return "pose_set";
+    case LogCode::kPoseRefused: return "pose_refused";
+    case LogCode::kClearRefused: return "clear_refused";
   }
   return "unknown";
 }
@@ -60,6 +64,30 @@ std::string format_log_record(const LogRecord& r) {
                         "loop cycle %llu t=%.3fs: localization swapped to %s (swap #%.0f) at "
                         "x=%.4f m y=%.4f m yaw=%.4f rad",
                         cycle, r.stamp_s, r.detail.data(), v[0], v[1], v[2], v[3]);
+      break;
+    case LogCode::kLocalizationSwapRefused:
+      n = std::snprintf(line, sizeof line,
+                        "loop cycle %llu t=%.3fs: localization swap refused by the incoming "
+                        "plugin's hand-over (%s); the active one stays",
+                        cycle, r.stamp_s, r.detail.data());
+      break;
+    case LogCode::kPoseSet:
+      n = std::snprintf(line, sizeof line,
+                        "loop cycle %llu t=%.3fs: pose set (request %.0f) to x=%.4f m y=%.4f m "
+                        "yaw=%.4f rad",
+                        cycle, r.stamp_s, v[0], v[1], v[2], v[3]);
+      break;
+    case LogCode::kPoseRefused:
+      n = std::snprintf(line, sizeof line,
+                        "loop cycle %llu t=%.3fs: pose refused (request %.0f) by the "
+                        "localization (%s)",
+                        cycle, r.stamp_s, v[0], r.detail.data());
+      break;
+    case LogCode::kClearRefused:
+      n = std::snprintf(line, sizeof line,
+                        "loop cycle %llu t=%.3fs: clear refused (request %.0f): fault %s "
+                        "persists (%s)",
+                        cycle, r.stamp_s, v[1], fault_name_of(v[0]), r.detail.data());
       break;
     default:
       n = std::snprintf(line, sizeof line, "loop cycle %llu t=%.3fs: %s: %s%s%s [%g %g %g %g]",

@@ -62,6 +62,10 @@ class TwistLimiter {
   void continue_from(const TwistLimiter& other) noexcept;
 
   [[nodiscard]] Twist2 value() const noexcept;
+  /// The axes on their own, e.g. to set one to the velocity the robot really got.
+  AxisLimiter& x() noexcept { return x_; }
+  AxisLimiter& y() noexcept { return y_; }
+  AxisLimiter& wz() noexcept { return wz_; }
   /// Whether any limit applies (otherwise step() returns its target).
   [[nodiscard]] bool active() const noexcept;
 

@@ -1,22 +1,35 @@
 #pragma once
 // The real-time loop (DESIGN.md "The real-time loop"). One thread at a fixed period runs:
 // hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
-// forward -> localization update -> newest velocity command -> drivetrain inverse -> write
-// hardware -> publish a StateSnapshot -> record timing.
+// forward -> localization update -> newest velocity command -> motion limits -> drivetrain
+// inverse -> write hardware -> publish a StateSnapshot -> record timing.
 //
-// Faults stop the robot in a controlled way (zero twist through inverse kinematics) and
-// the loop keeps running:
+// Motion limits: every velocity command goes through a motion::TwistLimiter with the robot
+// model's `limits:` (LoopOptions::limits). Whenever the loop itself stops the robot (a
+// fault, a command timeout, no command, the controlled stop before shutdown) the twist is
+// brought to zero by a second limiter: the same limits, with LoopOptions' stop deceleration
+// on the axes whose model has no acceleration limit. The loop's final cycle (stop()) writes
+// zero setpoints at once.
+//
+// Faults stop the robot in a controlled way (the limited twist through inverse kinematics)
+// and the loop keeps running:
 //  - a non-finite reading, a plugin returning kError (or a non-finite pose), or odometry that
 //    keeps disagreeing with the gyro or with itself (OdometryMonitor): mode
-//    kSafeStop with the fault latched until clear_fault() is requested and a cycle runs
-//    clean; the velocity command seen before is then discarded so that only a fresh one
+//    kSafeStop with the fault latched until a clear is requested (clear_fault() waits for a
+//    clean cycle; request_clear() is answered at the next cycle, refused while the cause
+//    persists); the velocity command seen before is then discarded so that only a fresh one
 //    moves the robot again;
 //  - the newest velocity command older than command_timeout_s: mode kIdle with fault
 //    kCommandTimeout; a fresh valid command resumes;
 //  - a non-finite velocity command: rejected, mode kIdle with fault kNonFiniteCommand; a
 //    fresh valid command resumes.
 // Each fault event (not each faulty cycle) is counted and logged through RtLog; the snapshot
-// carries the active fault's code and its cause (StateSnapshot::fault_detail).
+// carries the active fault's code and its cause (StateSnapshot::fault_detail). A hardware
+// fault also calls Hardware::on_error() at the end of its cycle (once, until a clear).
+//
+// Hot swap: the incoming localization's hand_over() decides. kOk: it becomes active and the
+// outgoing one is retired. kError or an exception: the outgoing one stays active, the
+// incoming one is retired instead and the refusal comes back with it; no fault latches.
 //
 // Calibration: start_calibration() hands the loop a configured Calibration; from the next
 // cycle boundary the mode is kCalibration and the setpoints come from its step() (the
@@ -31,16 +44,20 @@
 // command-source thread may call push_command() (velocity commands go through a latest-value
 // slot: the newest command wins), one motion-capture thread
 // push_motion_capture(), one thread (the configuration watcher) the swap pair, one thread
-// (the calibration runner) the calibration calls; any thread
-// may call latest(), timing(), clear_fault(), running() and now_s().
+// (the calibration runner) the calibration calls, one thread (the daemon's request handler)
+// request_clear(), request_set_pose(), take_reply() and the hardware pause pair; any thread
+// may call latest(), timing(), clear_fault(), request_controlled_stop(), running() and
+// now_s().
 
 #include <atomic>
 #include <cstdint>
 #include <future>
+#include <limits>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "swivel/motion/twist_limiter.hpp"
 #include "swivel/plugin/calibration.hpp"
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
@@ -63,6 +80,33 @@ struct LoopOptions {
   double command_timeout_s = 0.5;  ///< older velocity commands stop the robot
   /// Encoders against the gyro and the drivetrain residual (docs/faults.md).
   OdometryCheckOptions odometry_check;
+  /// The robot model's `limits:` (velocity, acceleration and jerk per axis): applied to every
+  /// velocity command and to the controlled stop. Absent limits are not applied.
+  MotionLimits limits;
+  /// Deceleration of the controlled stop on the axes whose `limits` has no acceleration
+  /// limit: x and y, m/s^2, and yaw, rad/s^2. Infinite: zero at once on those axes. The
+  /// daemon sets them from swiveld.yaml `controlled_stop:`.
+  double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
+  double stop_angular_deceleration_radps2 = std::numeric_limits<double>::infinity();
+};
+
+/// How a hot swap the loop took ended (take_retired_localization()).
+struct SwapOutcome {
+  /// True: the incoming instance became active and the outgoing one was retired. False: the
+  /// incoming one refused the hand-over, the outgoing one stays active and the incoming one
+  /// was retired instead.
+  bool taken = true;
+  FaultDetail refusal{};  ///< why it refused: its last_error() or the loop's text
+};
+
+/// The loop's answer to request_clear() or request_set_pose().
+struct LoopReply {
+  std::uint64_t id = 0;  ///< the request's id
+  bool ok = false;
+  /// Clear: the fault that was cleared (ok) or that persists (refused); kNone when there was
+  /// nothing to clear. Set-pose: kNone.
+  FaultCode fault = FaultCode::kNone;
+  FaultDetail detail{};  ///< the cleared or persisting fault's cause, or why a pose was refused
 };
 
 /// How a calibration handed back by the loop ended.
@@ -132,8 +176,10 @@ class ControlLoop {
   bool request_localization_swap(Localization* next, const char* name) noexcept;
 
   /// The swapping thread only. Real-time safe. The instance the loop let go of in the last
-  /// swap (it will never be called again: destroy and unload it), or nullptr.
-  Localization* take_retired_localization() noexcept;
+  /// swap (it will never be called again: destroy and unload it), or nullptr: the outgoing
+  /// instance, or the incoming one when it refused the hand-over. `outcome` (optional) says
+  /// which.
+  Localization* take_retired_localization(SwapOutcome* outcome = nullptr) noexcept;
 
   /// Any thread. Real-time safe. True while a requested swap has not been taken.
   [[nodiscard]] bool swap_pending() const noexcept {
@@ -177,6 +223,46 @@ class ControlLoop {
   /// is latched.
   void clear_fault() noexcept { clear_requested_.store(true, std::memory_order_release); }
 
+  /// The requesting thread only. Real-time safe. Asks the loop, once, to leave the fault it
+  /// reports; answered through take_reply() at the next cycle:
+  ///  - a latched fault (kSafeStop): cleared when that cycle runs without a fault, else
+  ///    refused with the fault and its cause (the request does not wait);
+  ///  - a command timeout: refused (the cause, a missing command stream, persists until a
+  ///    fresh command resumes by itself);
+  ///  - another transient fault (a rejected command, a cancelled calibration): cleared;
+  ///  - none: ok, nothing to clear.
+  /// A request replaces one the loop has not taken yet (that one is never answered).
+  void request_clear(std::uint64_t id) noexcept;
+
+  /// The requesting thread only. Real-time safe. Asks the loop to set the estimate to `pose`
+  /// at its next cycle boundary through the active localization's hand_over() (the hot-swap
+  /// path; the covariance only when pose.has_covariance). Answered through take_reply(): ok,
+  /// or refused with the plugin's reason (the estimate stays as it was; no fault).
+  void request_set_pose(const PoseEstimate& pose, std::uint64_t id) noexcept;
+
+  /// The requesting thread only. Real-time safe. The answer to the newest request, once.
+  bool take_reply(LoopReply& out) noexcept { return replies_.take(out); }
+
+  /// The requesting thread only. Not real-time safe: waits up to `timeout_s`. Stops the
+  /// loop's calls to the hardware (read and write) from a cycle boundary on, so that a
+  /// lifecycle method (Hardware::activate()) can run off the loop; the loop keeps cycling and
+  /// publishing meanwhile. Granted only while a fault is latched and the last setpoints
+  /// written were zero (the robot stopped); returns false when refused or not granted in
+  /// time. Call resume_hardware() after a true return.
+  bool pause_hardware(double timeout_s) noexcept;
+
+  /// The requesting thread only. Real-time safe. Lets the loop call the hardware again from
+  /// its next cycle (the first reading after a pause gives no odometry).
+  void resume_hardware() noexcept;
+
+  /// Any thread. Real-time safe. From the next cycle on, velocity commands are ignored, a
+  /// calibration is cancelled and the robot is brought to rest within the controlled stop's
+  /// limits while the loop keeps running (StateSnapshot::stopping). Irreversible: for
+  /// shutting down.
+  void request_controlled_stop() noexcept {
+    controlled_stop_requested_.store(true, std::memory_order_release);
+  }
+
   /// Runs one cycle on the calling thread at monotonic time `now_s` (tests, benchmarks).
   /// Real-time safe. Must not be called while the loop thread runs. Does not record timing.
   void run_cycle(double now_s) noexcept;
@@ -202,6 +288,12 @@ class ControlLoop {
   void check_odometry(const OdometryIncrement& odometry, double now_s) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
+  bool hold_hardware() noexcept;
+  void take_request(double now_s, std::uint64_t& clear_id) noexcept;
+  void answer_clear(std::uint64_t id, double now_s) noexcept;
+  void clear_latched_fault(double now_s) noexcept;
+  Twist2 limit(const Twist2& target, bool stopping, double now_s) noexcept;
+  void follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept;
   template <class Call>
   static Status guarded(Call&& call, const char*& thrown) noexcept;
   void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
@@ -229,6 +321,19 @@ class ControlLoop {
   std::atomic<CalibrationOutcome> retired_outcome_{CalibrationOutcome::kNone};
   std::atomic<bool> calibration_in_flight_{false};  // written by the calibrating thread
   std::atomic<bool> cancel_calibration_{false};
+  std::atomic<bool> controlled_stop_requested_{false};
+  // Hardware pause handshake (pause_hardware()): requester -> loop -> requester.
+  enum class HardwareAccess : std::uint8_t { kCalling, kPauseRequested, kPaused, kPauseRefused };
+  std::atomic<HardwareAccess> hardware_access_{HardwareAccess::kCalling};
+  struct LoopRequest {
+    enum class Kind : std::uint8_t { kClear, kSetPose } kind = Kind::kClear;
+    std::uint64_t id = 0;
+    PoseEstimate pose;
+  };
+  LatestValue<LoopRequest> requests_;
+  LatestValue<LoopReply> replies_;
+  // Written by the loop before it publishes a refused instance in retired_localization_.
+  SwapOutcome retired_outcome_swap_{};
   LatestValue<VelocityCommand> commands_;
   SpscRing<MotionCaptureSample, 64> motion_capture_;
   SnapshotBuffer<StateSnapshot> snapshot_;
@@ -249,6 +354,15 @@ class ControlLoop {
   FaultDetail latched_detail_{};                  // cause of latched_fault_
   FaultDetail transient_detail_{};                // cause of transient_fault_
   OdometryMonitor odometry_monitor_;
+  motion::TwistLimiter command_limiter_;  // the robot model's limits
+  motion::TwistLimiter stop_limiter_;     // the same, with the stop deceleration
+  motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
+  double last_cycle_s_ = 0.0;
+  bool has_last_cycle_ = false;
+  bool hardware_paused_ = false;  // the loop's view of hardware_access_
+  bool last_write_zero_ = true;   // the last setpoints written were all zero
+  bool stopping_ = false;         // the controlled stop was taken
+  bool clear_pending_ = false;    // a request_clear() taken this cycle
 
   // Non-real-time ownership.
   std::thread thread_;

@@ -29,6 +29,10 @@ enum class LogCode : std::uint16_t {
   kLocalizationSwapped,    ///< a = swap count, b..d = pose handed over (x, y, yaw)
   kZeroSetpointFallback,   ///< inverse kinematics failed or was non-finite: raw zeros written
   kMessage,                ///< free text only
+  kLocalizationSwapRefused,  ///< the incoming localization's hand_over failed; detail = why
+  kPoseSet,                ///< a = request id, b..d = pose set (x, y, yaw)
+  kPoseRefused,            ///< a = request id; detail = the localization's reason
+  kClearRefused,           ///< a = FaultCode that persists, b = request id; detail = cause
 };
 
 /// "fault_raised", ... for messages.

@@ -84,6 +84,12 @@ struct StateSnapshot {
   /// measured steering angles, rad, per module.
   std::array<double, kMaxModules> wheel_angle_rad{};
   std::array<double, kMaxModules> steer_angle_rad{};
+  /// The hardware is in its error state: on_error() was called and no clear has succeeded
+  /// since (a clear re-activates it first).
+  bool hardware_in_error = false;
+  /// ControlLoop::request_controlled_stop() was taken: commands are ignored and the robot is
+  /// brought to rest before the daemon shuts down.
+  bool stopping = false;
 };
 
 static_assert(std::is_trivially_copyable_v<VelocityCommand>);
