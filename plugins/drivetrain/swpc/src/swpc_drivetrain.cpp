@@ -76,6 +76,9 @@ void SwpcDrivetrain::configure(const PluginContext& ctx) {
   if (ctx.robot->drivetrain != DrivetrainKind::kSwpc) {
     throw ConfigError(ctx.robot->source_file + ": drivetrain: expected 'swpc' for the swpc plugin");
   }
+  if (ctx.robot->limits.steering_rate_radps) {
+    limits.commanded_steer_rate_radps = *ctx.robot->limits.steering_rate_radps;
+  }
   const int counts = std::min(ctx.robot->sensors.wheel_encoder_counts_per_rev,
                               ctx.robot->sensors.steering_encoder_counts_per_rev);
   if (counts > 0) limits.plausibility_margin_rad = 4.0 * 2.0 * std::numbers::pi / counts;
@@ -110,6 +113,9 @@ void SwpcDrivetrain::configure(std::span<const SwpcModuleParams> modules,
       !(limits.min_speed_mps >= 0.0) || !finite(limits.max_wheel_rate_radps) ||
       !finite(limits.max_steer_rate_radps) || !finite(limits.min_speed_mps)) {
     throw ConfigError("swpc limits: expected positive rate limits and min_speed_mps >= 0");
+  }
+  if (!(limits.commanded_steer_rate_radps > 0.0)) {
+    throw ConfigError("limits.steering_rate_radps: expected a positive number");
   }
   if (!finite(limits.plausible_rate_factor) || !(limits.plausible_rate_factor >= 1.0) ||
       !finite(limits.plausibility_margin_rad) || !(limits.plausibility_margin_rad >= 0.0)) {
@@ -227,9 +233,9 @@ Status SwpcDrivetrain::inverse(const Twist2& command, const HardwareState& curre
   for (std::uint32_t i = 0; i < count_; ++i) {
     rates[i] = swpc::inverse_module(modules_[i], phi[i], command);
   }
-  const double scale =
-      swpc::desaturation_scale(std::span<const swpc::ModuleRates>(rates.data(), count_),
-                               limits_.max_wheel_rate_radps, limits_.max_steer_rate_radps);
+  const double scale = swpc::desaturation_scale(
+      std::span<const swpc::ModuleRates>(rates.data(), count_), limits_.max_wheel_rate_radps,
+      std::min(limits_.max_steer_rate_radps, limits_.commanded_steer_rate_radps));
 
   // Near zero speed. At a fixed steering angle the lateral part of v_s can only be produced
   // by swinging the caster: phi_dot = (n . v_s)/d - w, i.e. 1/d = 50 rad per metre of

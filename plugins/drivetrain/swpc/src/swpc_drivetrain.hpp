@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "swivel/plugin/drivetrain.hpp"
@@ -17,6 +18,11 @@ namespace swivel::plugins {
 struct SwpcDrivetrainLimits {
   double max_wheel_rate_radps = 40.0;  ///< |psi_dot| limit of every wheel
   double max_steer_rate_radps = 12.0;  ///< |phi_dot| limit of every steering motor
+  /// The robot model's `limits: steering_rate_radps` (infinite when absent): what the
+  /// robot's own controller lets a steering motor do. Commanded steering rates stay within
+  /// it and max_steer_rate_radps; the encoder plausibility check keeps max_steer_rate_radps
+  /// alone, so that a limit lowered here never rejects a faster measured swing.
+  double commanded_steer_rate_radps = std::numeric_limits<double>::infinity();
   /// Below this fastest steering-axis speed a command is treated as "near zero": it is
   /// faded out, reaching exactly zero (casters hold their angle) at half of it. 0 disables.
   double min_speed_mps = 0.005;
@@ -29,9 +35,10 @@ struct SwpcDrivetrainLimits {
 
 class SwpcDrivetrain final : public Drivetrain {
  public:
-  /// Off the loop. Geometry from ctx.robot->modules (2..kMaxModules, d > 0, r > 0); params
-  /// max_wheel_rate_radps, max_steer_rate_radps, min_speed_mps, plausible_rate_factor (all
-  /// optional); the plausibility margin is 4 counts of the coarser encoder of the model.
+  /// Off the loop. Geometry from ctx.robot->modules (2..kMaxModules, d > 0, r > 0) and the
+  /// steering-rate limit from ctx.robot->limits; params max_wheel_rate_radps,
+  /// max_steer_rate_radps, min_speed_mps, plausible_rate_factor (all optional); the
+  /// plausibility margin is 4 counts of the coarser encoder of the model.
   /// @throws ConfigError naming the key.
   void configure(const PluginContext& ctx) override;
 
@@ -48,7 +55,9 @@ class SwpcDrivetrain final : public Drivetrain {
                  OdometryIncrement& out) noexcept override;
 
   /// Real-time safe. Rates at the current measured steering angles, the whole twist scaled
-  /// to respect every limit, faded to zero near zero speed. `dt_s` is only validated.
+  /// so that every wheel rate is within max_wheel_rate_radps and every steering rate within
+  /// max_steer_rate_radps and commanded_steer_rate_radps, faded to zero near zero speed.
+  /// `dt_s` is only validated.
   Status inverse(const Twist2& command, const HardwareState& current, double dt_s,
                  ActuatorCommand& out, Twist2& applied) noexcept override;
 

@@ -556,6 +556,51 @@ TEST(SwpcDrivetrain, ConfiguresFromTheSwpc4ModelAndParams) {
   EXPECT_THROW(SwpcDrivetrain().configure(ctx), ConfigError);
 }
 
+// The robot model's limits: steering_rate_radps bounds every commanded steering rate (the
+// whole twist scales, so the modules stay consistent); the plausibility check of measured
+// increments keeps the plugin's own, higher max_steer_rate_radps.
+TEST(SwpcDrivetrain, TheModelsSteeringRateLimitBoundsEverySteeringSetpoint) {
+  RobotModel robot = load_robot_model(source_path("config/robots/swpc4.yaml"));
+  robot.limits.steering_rate_radps = 2.0;
+  PluginContext ctx;
+  ctx.robot = &robot;
+  ctx.config_file = "swiveld.yaml";
+  ctx.params_path = "drivetrain.params";
+  ctx.params = YAML::Load("{max_steer_rate_radps: 12.0}");
+  SwpcDrivetrain drivetrain;
+  drivetrain.configure(ctx);
+  EXPECT_EQ(drivetrain.limits().commanded_steer_rate_radps, 2.0);
+  EXPECT_EQ(drivetrain.limits().max_steer_rate_radps, 12.0);
+
+  // Casters across the direction of travel: a sideways command swings them fast.
+  const HardwareState state = state_at({0.0, 0.0, 0.0, 0.0});
+  ActuatorCommand cmd;
+  Twist2 applied;
+  ASSERT_EQ(drivetrain.inverse(Twist2{0.0, 0.5, 0.0}, state, kDt, cmd, applied), Status::kOk);
+  double fastest = 0.0;
+  for (std::size_t i = 0; i < 4; ++i) fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
+  EXPECT_NEAR(fastest, 2.0, 1e-12);  // the most loaded steering motor at the model's limit
+  EXPECT_GT(applied.vy_mps, 0.0);
+  EXPECT_LT(applied.vy_mps, 0.5);
+
+  // A measured swing at 6 rad/s (above 3 x 2 rad/s, below 3 x 12) is still plausible.
+  HardwareState previous = state_at({0.0, 0.0, 0.0, 0.0});
+  HardwareState current = state_at({0.006, 0.0, 0.0, 0.0});
+  previous.stamp_s = 1.0;
+  current.stamp_s = 1.0 + kDt;
+  OdometryIncrement inc;
+  EXPECT_EQ(drivetrain.forward(previous, current, inc), Status::kOk) << drivetrain.last_error();
+
+  // Without the model's limit the plugin's own bound applies.
+  robot.limits.steering_rate_radps.reset();
+  SwpcDrivetrain unlimited;
+  unlimited.configure(ctx);
+  ASSERT_EQ(unlimited.inverse(Twist2{0.0, 0.5, 0.0}, state, kDt, cmd, applied), Status::kOk);
+  fastest = 0.0;
+  for (std::size_t i = 0; i < 4; ++i) fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
+  EXPECT_GT(fastest, 2.0);
+}
+
 TEST(SwpcDrivetrain, SharedLibraryExportsTheSwpcDrivetrain) {
   void* handle = dlopen(SWPC_PLUGIN_FILE, RTLD_NOW | RTLD_LOCAL);
   ASSERT_NE(handle, nullptr) << dlerror();
