@@ -161,12 +161,20 @@ TEST(LoopLimits, TheLimiterFollowsTheDrivetrainsOwnLimits) {
 TEST(ControlledStop, IgnoresCommandsAndBringsTheRobotToRest) {
   Rig rig(options_with(acceleration_limit(1.0)));
   rig.drive(0.5, 1000);
-  rig.loop->request_controlled_stop();
+  Pose2 asked;
+  ASSERT_TRUE(rig.hardware.ground_truth(asked));
+  rig.loop->request_controlled_stop(rig.t_s);
   rig.drive(0.5, 1);
   EXPECT_TRUE(rig.state().stopping);
-  EXPECT_NEAR(rig.vx(), 0.5 - kDtS, 1e-9);
+  // Braking counts from the request, a period ago, and the new setpoint is the ramp's value
+  // half a period ahead, when it is in force.
+  EXPECT_NEAR(rig.vx(), 0.5 - 1.5 * kDtS, 1e-9);
   rig.drive(0.5, 499);
   EXPECT_NEAR(rig.vx(), 0.0, 1e-12);
+  Pose2 at_rest;
+  ASSERT_TRUE(rig.hardware.ground_truth(at_rest));
+  // What the robot travelled after the request: v^2 / (2 a), to within a fraction of a cycle.
+  EXPECT_NEAR(at_rest.x_m - asked.x_m, 0.5 * 0.5 / 2.0, 0.25 * 0.5 * kDtS);
   rig.drive(0.5, 100);  // still commanded: stays at rest
   EXPECT_EQ(rig.vx(), 0.0);
   EXPECT_EQ(rig.state().mode, LoopMode::kIdle);
@@ -378,7 +386,7 @@ TEST(LoopRecoveryAllocations, LimitsStopsClearsPosesAndRollbacksAllocateNothing)
     (void)rig.loop->request_localization_swap(&refusing, "refusing");
     rig.drive(0.5, 10);
     (void)rig.loop->take_retired_localization();
-    rig.loop->request_controlled_stop();
+    rig.loop->request_controlled_stop(rig.t_s);
     rig.drive(0.5, 1000);
     counts = counter.counts();
   });

@@ -244,6 +244,14 @@ bool ControlLoop::pause_hardware(double timeout_s) noexcept {
   return false;
 }
 
+void ControlLoop::request_controlled_stop(double requested_s) noexcept {
+  bool expected = false;
+  if (controlled_stop_requested_.load(std::memory_order_acquire)) return;
+  controlled_stop_requested_s_.store(requested_s, std::memory_order_relaxed);
+  (void)controlled_stop_requested_.compare_exchange_strong(expected, true,
+                                                           std::memory_order_acq_rel);
+}
+
 void ControlLoop::resume_hardware() noexcept {
   hardware_access_.store(HardwareAccess::kCalling, std::memory_order_release);
 }
@@ -562,10 +570,17 @@ Twist2 ControlLoop::limit(const Twist2& target, bool stopping, double now_s) noe
     limiter.reset(target);
     return target;
   }
-  // The time that really passed, so that a late cycle does not stretch a stop; bounded so
-  // that a stall does not let the twist jump.
+  // The time that really passed, so that a late cycle does not stretch a stop. Towards a
+  // command it is bounded, so that a stalled loop does not make the twist jump up; a stop
+  // only ever moves towards zero, so it takes all of it.
   double dt_s = period_s_;
-  if (has_last_cycle_ && now_s > last_cycle_s_) dt_s = std::min(now_s - last_cycle_s_, 2.0 * period_s_);
+  if (has_last_cycle_ && now_s > last_cycle_s_) {
+    dt_s = stopping ? now_s - last_cycle_s_ : std::min(now_s - last_cycle_s_, 10.0 * period_s_);
+  }
+  if (stopping && stop_catch_up_s_ != 0.0) {
+    dt_s = std::max(dt_s + stop_catch_up_s_, 0.0);
+    stop_catch_up_s_ = 0.0;
+  }
   return limiter.step(target, dt_s);
 }
 
@@ -599,6 +614,13 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   }
   if (!stopping_ && controlled_stop_requested_.load(std::memory_order_acquire)) {
     stopping_ = true;
+    // The setpoint about to be written holds for a period, and the last one has held since
+    // the request: the first step decelerates for both, so that the stop brakes as if it had
+    // begun at the request and each setpoint were the ramp's value mid-period.
+    const double since_request_s =
+        now_s - controlled_stop_requested_s_.load(std::memory_order_relaxed);
+    stop_catch_up_s_ = std::max(since_request_s, 0.0) + 0.5 * period_s_ -
+                       (has_last_cycle_ ? std::max(now_s - last_cycle_s_, 0.0) : period_s_);
     log_event(LogLevel::kInfo, LogCode::kMessage, now_s,
               "controlled stop: commands ignored, bringing the robot to rest");
   }

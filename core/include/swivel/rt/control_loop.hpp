@@ -258,10 +258,10 @@ class ControlLoop {
   /// Any thread. Real-time safe. From the next cycle on, velocity commands are ignored, a
   /// calibration is cancelled and the robot is brought to rest within the controlled stop's
   /// limits while the loop keeps running (StateSnapshot::stopping). Irreversible: for
-  /// shutting down.
-  void request_controlled_stop() noexcept {
-    controlled_stop_requested_.store(true, std::memory_order_release);
-  }
+  /// shutting down. `requested_s` (the loop's clock, now_s()) is when the stop was asked
+  /// for: the deceleration counts from then, not from the cycle that takes the request.
+  /// Later calls change nothing.
+  void request_controlled_stop(double requested_s) noexcept;
 
   /// Runs one cycle on the calling thread at monotonic time `now_s` (tests, benchmarks).
   /// Real-time safe. Must not be called while the loop thread runs. Does not record timing.
@@ -322,6 +322,8 @@ class ControlLoop {
   std::atomic<bool> calibration_in_flight_{false};  // written by the calibrating thread
   std::atomic<bool> cancel_calibration_{false};
   std::atomic<bool> controlled_stop_requested_{false};
+  std::atomic<double> controlled_stop_requested_s_{0.0};  // written before the flag
+  static_assert(std::atomic<double>::is_always_lock_free);
   // Hardware pause handshake (pause_hardware()): requester -> loop -> requester.
   enum class HardwareAccess : std::uint8_t { kCalling, kPauseRequested, kPaused, kPauseRefused };
   std::atomic<HardwareAccess> hardware_access_{HardwareAccess::kCalling};
@@ -362,6 +364,7 @@ class ControlLoop {
   bool hardware_paused_ = false;  // the loop's view of hardware_access_
   bool last_write_zero_ = true;   // the last setpoints written were all zero
   bool stopping_ = false;         // the controlled stop was taken
+  double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
 
   // Non-real-time ownership.
