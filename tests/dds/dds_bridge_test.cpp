@@ -258,7 +258,7 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
   r.robot_id = own.data();
   r.verb = verb.data();
   r.argument = argument.data();
-  r.sequence_number = 5;
+  r.request_id = 5;
   ASSERT_EQ(dds_write(request, &r), DDS_RETCODE_OK);
 
   ASSERT_TRUE(wait_for([&] {
@@ -274,7 +274,71 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
   EXPECT_NEAR(captures[1].stamp_s, monotonic_now_s(), 5.0);
   EXPECT_EQ(requests[0].verb, "reload");
   EXPECT_EQ(requests[0].argument, "");
-  EXPECT_EQ(requests[0].sequence_number, 5u);
+  EXPECT_EQ(requests[0].request_id, 5u);
+}
+
+// swivelctl set-pose's SetPose reaches on_set_pose with the sigmas as variances, and the
+// Reply the daemon publishes reaches a reader keyed by robot and request id.
+TEST(DdsBridge, DeliversSetPoseAndPublishesItsReply) {
+  const std::string robot = unique_robot_id("set_pose");
+  FakeLoop loop;
+  std::mutex mutex;
+  std::vector<SetPoseSample> poses;
+  DdsBridge bridge({}, robot,
+                   {.read_state = [&](StateSnapshot& s) { return loop.read(s); },
+                    .on_set_pose = [&](const SetPoseSample& p) {
+                      const std::scoped_lock lock(mutex);
+                      poses.push_back(p);
+                    }});
+  bridge.start();
+  Client client;
+  const dds_entity_t writer = client.writer(&swivel_msg_SetPose_desc, kSetPoseTopic);
+  const dds_entity_t replies = client.reader<swivel_msg_Reply>(&swivel_msg_Reply_desc, kReplyTopic);
+  ASSERT_TRUE(wait_for([&] { return publication_matched(writer) && subscription_matched(replies); }));
+
+  std::string own = robot;
+  swivel_msg_SetPose p{};
+  p.robot_id = own.data();
+  p.request_id = 77;
+  p.x_m = 1.0;
+  p.y_m = -2.0;
+  p.yaw_rad = 0.5;
+  p.has_covariance = true;
+  p.sigma_x_m = 0.1;
+  p.sigma_y_m = -0.2;  // stays visible as a negative variance
+  p.sigma_yaw_rad = 0.05;
+  ASSERT_EQ(dds_write(writer, &p), DDS_RETCODE_OK);
+  ASSERT_TRUE(wait_for([&] {
+    const std::scoped_lock lock(mutex);
+    return poses.size() == 1;
+  })) << "no SetPose reached on_set_pose within 10 s";
+  {
+    const std::scoped_lock lock(mutex);
+    EXPECT_EQ(poses[0].request_id, 77u);
+    EXPECT_TRUE(poses[0].wants_reply);
+    EXPECT_EQ(poses[0].pose.pose.y_m, -2.0);
+    EXPECT_TRUE(poses[0].pose.has_covariance);
+    EXPECT_NEAR(poses[0].pose.covariance[0], 0.01, 1e-15);
+    EXPECT_NEAR(poses[0].pose.covariance[4], -0.04, 1e-15);
+    EXPECT_NEAR(poses[0].pose.covariance[8], 0.0025, 1e-15);
+    EXPECT_EQ(poses[0].pose.covariance[1], 0.0);
+  }
+
+  bridge.publish_reply({77, "set_pose", false, "refused: negative variance"});
+  bool ok = true;
+  std::string text;
+  std::uint64_t id = 0;
+  ASSERT_TRUE(wait_for([&] {
+    return take_one<swivel_msg_Reply>(replies, [&](const swivel_msg_Reply& r) {
+      ok = r.ok;
+      text = r.text;
+      id = r.request_id;
+    });
+  })) << "no Reply within 10 s";
+  EXPECT_EQ(id, 77u);
+  EXPECT_FALSE(ok);
+  EXPECT_EQ(text, "refused: negative variance");
+  EXPECT_EQ(bridge.counters().replies_published, 1u);
 }
 
 TEST(DdsBridge, PublishesDiagnostics) {

@@ -1,14 +1,17 @@
 // ROS 2 compatibility checked with raw Cyclone entities of the ROS 2 types, as
 // rmw_cyclonedds would create them: the wire type name, plain CDR, topic names and the
-// field mapping of nav_msgs/Odometry and geometry_msgs/Twist.
+// field mapping of nav_msgs/Odometry, geometry_msgs/Twist and
+// geometry_msgs/PoseWithCovarianceStamped.
 
 #include <gtest/gtest.h>
 #include <time.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dds_test_util.hpp"
@@ -150,13 +153,85 @@ TEST(Ros2Compat, AcceptsCmdVelTwistFromReliableAndBestEffortPublishers) {
   EXPECT_DOUBLE_EQ(received[0].twist.wz_radps, 0.7);
 }
 
+// RViz's "2D Pose Estimate" and `ros2 topic pub /initialpose ...`: a reliable
+// PoseWithCovarianceStamped. The pose in the odometry frame becomes a set-pose without a
+// reply; one in another frame is ignored.
+TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
+  const std::string ns = unique_robot_id("swivel_test_initialpose");
+  std::mutex mutex;
+  std::vector<SetPoseSample> received;
+  DdsBridge bridge(ros2_options(ns), "ros2_robot",
+                   {.read_state = [](StateSnapshot&) { return false; },
+                    .on_set_pose = [&](const SetPoseSample& p) {
+                      const std::scoped_lock lock(mutex);
+                      received.push_back(p);
+                    }});
+  bridge.start();
+  Participant client({0, tool_config_uri()});
+  const dds_entity_t topic =
+      create_topic(client.handle(), &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
+                   ("rt/" + ns + "/initialpose").c_str());
+  const QosPtr reliable = default_qos(10);
+  const dds_entity_t writer = dds_create_writer(client.handle(), topic, reliable.get(), nullptr);
+  ASSERT_TRUE(wait_for([&] { return publication_matched(writer); }))
+      << "the bridge's initialpose reader did not match within 10 s";
+
+  std::string map = "map", odom = "odom";
+  geometry_msgs_msg_dds__PoseWithCovarianceStamped_ msg{};
+  msg.header.frame_id = map.data();
+  msg.pose.pose.position.x = 9.0;
+  msg.pose.pose.orientation.w = 1.0;
+  ASSERT_EQ(dds_write(writer, &msg), DDS_RETCODE_OK);  // another frame: ignored
+
+  msg.header.frame_id = odom.data();
+  msg.pose.pose.position.x = 1.5;
+  msg.pose.pose.position.y = -0.5;
+  yaw_to_quaternion(0.8, msg.pose.pose.orientation.x, msg.pose.pose.orientation.y,
+                    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w);
+  msg.pose.covariance[0] = 0.25;       // x
+  msg.pose.covariance[7] = 0.16;       // y
+  msg.pose.covariance[35] = 0.0685;    // yaw
+  msg.pose.covariance[5] = 0.01;       // x-yaw
+  ASSERT_EQ(dds_write(writer, &msg), DDS_RETCODE_OK);
+
+  ASSERT_TRUE(wait_for([&] {
+    const std::scoped_lock lock(mutex);
+    return !received.empty();
+  })) << "no initialpose reached on_set_pose within 10 s";
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const std::scoped_lock lock(mutex);
+  ASSERT_EQ(received.size(), 1u) << "the pose in frame 'map' was not ignored";
+  const SetPoseSample& p = received[0];
+  EXPECT_FALSE(p.wants_reply);
+  EXPECT_EQ(p.source, "rt/" + ns + "/initialpose");
+  EXPECT_DOUBLE_EQ(p.pose.pose.x_m, 1.5);
+  EXPECT_DOUBLE_EQ(p.pose.pose.y_m, -0.5);
+  EXPECT_NEAR(p.pose.pose.yaw_rad, 0.8, 1e-12);
+  ASSERT_TRUE(p.pose.has_covariance);
+  EXPECT_DOUBLE_EQ(p.pose.covariance[0], 0.25);
+  EXPECT_DOUBLE_EQ(p.pose.covariance[4], 0.16);
+  EXPECT_DOUBLE_EQ(p.pose.covariance[8], 0.0685);
+  EXPECT_DOUBLE_EQ(p.pose.covariance[2], 0.01);
+}
+
+TEST(Ros2Compat, QuaternionToYawInvertsYawToQuaternion) {
+  for (const double yaw : {0.0, 0.5, -2.0, 3.1}) {
+    double x, y, z, w;
+    yaw_to_quaternion(yaw, x, y, z, w);
+    EXPECT_NEAR(quaternion_to_yaw(x, y, z, w), yaw, 1e-12);
+  }
+  EXPECT_TRUE(std::isnan(quaternion_to_yaw(0.0, 0.0, 0.0, 0.0)));  // not a rotation
+}
+
 TEST(Ros2Compat, TopicNamesFollowTheNamespace) {
   Ros2Options options;
   EXPECT_EQ(options.odom_topic(), "rt/odom");
   EXPECT_EQ(options.cmd_vel_topic(), "rt/cmd_vel");
+  EXPECT_EQ(options.initialpose_topic(), "rt/initialpose");
   options.ros_namespace = "fleet/docent";
   EXPECT_EQ(options.odom_topic(), "rt/fleet/docent/odom");
   EXPECT_EQ(options.cmd_vel_topic(), "rt/fleet/docent/cmd_vel");
+  EXPECT_EQ(options.initialpose_topic(), "rt/fleet/docent/initialpose");
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <deque>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 
@@ -63,6 +65,14 @@ void yaw_to_quaternion(double yaw_rad, double& x, double& y, double& z, double& 
   w = std::cos(0.5 * yaw_rad);
 }
 
+double quaternion_to_yaw(double x, double y, double z, double w) noexcept {
+  const double norm = std::sqrt(x * x + y * y + z * z + w * w);
+  if (!std::isfinite(norm) || std::abs(norm - 1.0) > 0.01) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+}
+
 struct DdsBridge::Entities {
   // Without dds.config, CYCLONEDDS_URI decides; without either, Swivel's loopback-only file
   // (never Cyclone's defaults, which would send discovery out of every interface).
@@ -75,15 +85,23 @@ struct DdsBridge::Entities {
   dds_entity_t modules_writer = 0;
   dds_entity_t diagnostics_writer = 0;
   dds_entity_t calibration_writer = 0;
+  dds_entity_t reply_writer = 0;
   dds_entity_t odom_writer = 0;  ///< ROS 2, 0 when disabled
   dds_entity_t command_reader = 0;
   dds_entity_t motion_capture_reader = 0;
   dds_entity_t request_reader = 0;
-  dds_entity_t cmd_vel_reader = 0;  ///< ROS 2, 0 when disabled
+  dds_entity_t set_pose_reader = 0;
+  dds_entity_t cmd_vel_reader = 0;      ///< ROS 2, 0 when disabled
+  dds_entity_t initialpose_reader = 0;  ///< ROS 2, 0 when disabled
   dds_entity_t waitset = 0;
 
   std::mutex wake_mutex;
   std::condition_variable_any wake;
+
+  // Reply instances still registered, oldest first (publish_reply()).
+  static constexpr std::size_t kRepliesKept = 32;
+  std::mutex reply_mutex;
+  std::deque<std::uint64_t> reply_ids;
 };
 
 DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbacks callbacks)
@@ -117,11 +135,13 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
       writer(&swivel_msg_Diagnostics_desc, kDiagnosticsTopic, writer_qos.get());
   dds_->calibration_writer =
       writer(&swivel_msg_CalibrationResult_desc, kCalibrationResultTopic, writer_qos.get());
+  dds_->reply_writer = writer(&swivel_msg_Reply_desc, kReplyTopic, writer_qos.get());
   dds_->command_reader =
       reader(&swivel_msg_VelocityCommand_desc, kVelocityCommandTopic, reader_qos.get());
   dds_->motion_capture_reader =
       reader(&swivel_msg_MotionCapture_desc, kMotionCaptureTopic, reader_qos.get());
   dds_->request_reader = reader(&swivel_msg_Request_desc, kRequestTopic, reader_qos.get());
+  dds_->set_pose_reader = reader(&swivel_msg_SetPose_desc, kSetPoseTopic, reader_qos.get());
   if (options_.ros2.enabled) {
     dds_->odom_writer = writer(&nav_msgs_msg_dds__Odometry__desc, options_.ros2.odom_topic(),
                                writer_qos.get());
@@ -129,11 +149,16 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
     const QosPtr cmd_vel_qos = best_effort_qos(10);
     dds_->cmd_vel_reader = reader(&geometry_msgs_msg_dds__Twist__desc,
                                   options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
+    // Reliable, as RViz and `ros2 topic pub` publish it: a one-off pose must not be lost.
+    dds_->initialpose_reader =
+        reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
+               options_.ros2.initialpose_topic(), reader_qos.get());
   }
 
   dds_->waitset = check(dds_create_waitset(pp), "dds_create_waitset");
-  for (const dds_entity_t r : {dds_->command_reader, dds_->motion_capture_reader,
-                               dds_->request_reader, dds_->cmd_vel_reader}) {
+  for (const dds_entity_t r :
+       {dds_->command_reader, dds_->motion_capture_reader, dds_->request_reader,
+        dds_->set_pose_reader, dds_->cmd_vel_reader, dds_->initialpose_reader}) {
     if (r == 0) continue;
     const dds_entity_t condition =
         check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
@@ -172,6 +197,7 @@ BridgeCounters DdsBridge::counters() const {
   c.commands_ignored = commands_ignored_.load();
   c.motion_captures_received = motion_captures_received_.load();
   c.requests_received = requests_received_.load();
+  c.replies_published = replies_published_.load();
   return c;
 }
 
@@ -349,6 +375,28 @@ void DdsBridge::publish_calibration(const CalibrationSample& sample) {
   check(dds_write(dds_->calibration_writer, &msg), "dds_write(calibration result)");
 }
 
+void DdsBridge::publish_reply(const ReplySample& reply) {
+  swivel_msg_Reply msg{};
+  msg.robot_id = c_str(robot_id_);
+  msg.request_id = reply.request_id;
+  msg.verb = c_str(reply.verb);
+  msg.ok = reply.ok;
+  msg.text = c_str(reply.text);
+  const std::scoped_lock lock(dds_->reply_mutex);
+  check(dds_write(dds_->reply_writer, &msg), "dds_write(reply)");
+  replies_published_.fetch_add(1, std::memory_order_relaxed);
+  dds_->reply_ids.push_back(reply.request_id);
+  if (dds_->reply_ids.size() > Entities::kRepliesKept) {
+    swivel_msg_Reply oldest{};
+    oldest.robot_id = c_str(robot_id_);
+    oldest.request_id = dds_->reply_ids.front();
+    oldest.verb = const_cast<char*>("");
+    oldest.text = const_cast<char*>("");
+    dds_->reply_ids.pop_front();
+    (void)dds_unregister_instance(dds_->reply_writer, &oldest);
+  }
+}
+
 void DdsBridge::subscribe_loop(const std::stop_token& stop) {
   std::array<dds_attach_t, 8> triggered{};
   while (!stop.stop_requested()) {
@@ -363,6 +411,8 @@ void DdsBridge::subscribe_loop(const std::stop_token& stop) {
       take_ros2_commands();
       take_motion_capture();
       take_requests();
+      take_set_poses();
+      take_ros2_initialposes();
     } catch (const std::exception& e) {
       spdlog::warn("dds: command handling failed: {}", e.what());
     }
@@ -423,9 +473,65 @@ void DdsBridge::take_requests() {
     RequestSample sample;
     sample.verb = r.verb != nullptr ? r.verb : "";
     sample.argument = r.argument != nullptr ? r.argument : "";
-    sample.sequence_number = r.sequence_number;
+    sample.request_id = r.request_id;
     callbacks_.on_request(sample);
   });
+}
+
+void DdsBridge::take_set_poses() {
+  take_all<swivel_msg_SetPose>(dds_->set_pose_reader, [this](const swivel_msg_SetPose& p) {
+    if (p.robot_id == nullptr || robot_id_ != p.robot_id) return;
+    requests_received_.fetch_add(1, std::memory_order_relaxed);
+    if (!callbacks_.on_set_pose) return;
+    SetPoseSample sample;
+    sample.request_id = p.request_id;
+    sample.pose.pose = {p.x_m, p.y_m, p.yaw_rad};
+    sample.pose.has_covariance = p.has_covariance;
+    if (p.has_covariance) {
+      // sigma * |sigma|: a negative sigma stays visible to the daemon's check as a negative
+      // variance instead of hiding behind its square.
+      const auto variance = [](double sigma) { return sigma * std::abs(sigma); };
+      sample.pose.covariance = {variance(p.sigma_x_m), 0.0, 0.0,
+                                0.0, variance(p.sigma_y_m), 0.0,
+                                0.0, 0.0, variance(p.sigma_yaw_rad)};
+    }
+    sample.source = kSetPoseTopic;
+    callbacks_.on_set_pose(sample);
+  });
+}
+
+void DdsBridge::take_ros2_initialposes() {
+  if (dds_->initialpose_reader == 0) return;
+  take_all<geometry_msgs_msg_dds__PoseWithCovarianceStamped_>(
+      dds_->initialpose_reader,
+      [this](const geometry_msgs_msg_dds__PoseWithCovarianceStamped_& m) {
+        requests_received_.fetch_add(1, std::memory_order_relaxed);
+        const std::string frame = m.header.frame_id != nullptr ? m.header.frame_id : "";
+        if (!frame.empty() && frame != options_.ros2.odom_frame_id) {
+          spdlog::warn("{}: pose in frame '{}' ignored: swiveld estimates the pose in '{}'",
+                       options_.ros2.initialpose_topic(), frame, options_.ros2.odom_frame_id);
+          return;
+        }
+        if (!callbacks_.on_set_pose) return;
+        const auto& q = m.pose.pose.orientation;
+        SetPoseSample sample;
+        sample.wants_reply = false;
+        sample.source = options_.ros2.initialpose_topic();
+        sample.pose.pose = {m.pose.pose.position.x, m.pose.pose.position.y,
+                            quaternion_to_yaw(q.x, q.y, q.z, q.w)};
+        // (x, y, yaw) sit at rows/columns (0, 1, 5) of ROS's 6x6; all zero means "none".
+        constexpr std::array<int, 3> kIndex{0, 1, 5};
+        bool any = false;
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) {
+            const double v = m.pose.covariance[kIndex[r] * 6 + kIndex[c]];
+            sample.pose.covariance[r * 3 + c] = v;
+            any = any || v != 0.0;
+          }
+        }
+        sample.pose.has_covariance = any;
+        callbacks_.on_set_pose(sample);
+      });
 }
 
 }  // namespace swivel::dds

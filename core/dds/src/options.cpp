@@ -38,6 +38,10 @@ std::string Ros2Options::odom_topic() const { return ros2_topic(ros_namespace, "
 
 std::string Ros2Options::cmd_vel_topic() const { return ros2_topic(ros_namespace, "cmd_vel"); }
 
+std::string Ros2Options::initialpose_topic() const {
+  return ros2_topic(ros_namespace, "initialpose");
+}
+
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir) {
   ParamReader reader(node, file, "dds");

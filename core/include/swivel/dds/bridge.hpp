@@ -3,11 +3,13 @@
 // publish rate and writes RobotState, ModuleStates (and ROS 2 odometry when enabled); it
 // writes Diagnostics at the diagnostics rate. A subscriber thread waits on the command
 // readers and hands each accepted sample to a callback, which the daemon wires into the
-// loop's lock-free rings. The bridge knows nothing of the loop beyond these callbacks.
+// loop's lock-free rings or its request queue. Requests (Request, SetPose) are answered with
+// publish_reply(). The bridge knows nothing of the loop beyond these callbacks.
 //
 // Thread safety: the callbacks run on the bridge's threads (read_state and
 // read_diagnostics on the publisher thread, the others on the subscriber thread), never on
-// the caller's. Nothing here is real-time safe.
+// the caller's. publish_calibration() and publish_reply() may be called from any thread.
+// Nothing here is real-time safe.
 
 #include <atomic>
 #include <cstdint>
@@ -55,9 +57,25 @@ struct DiagnosticsSample {
 
 /// A request addressed to this robot (Request topic).
 struct RequestSample {
-  std::string verb;      ///< "reload" or "calibrate"
+  std::string verb;      ///< "reload", "calibrate" or "clear"
   std::string argument;  ///< verb-specific, "" when none
-  std::uint64_t sequence_number = 0;
+  std::uint64_t request_id = 0;  ///< echoed in the Reply
+};
+
+/// A pose to set, from SetPose or the ROS 2 initialpose topic.
+struct SetPoseSample {
+  std::uint64_t request_id = 0;  ///< echoed in the Reply (SetPose only)
+  PoseEstimate pose;             ///< world frame; the covariance only when the sender gave one
+  bool wants_reply = true;       ///< false for ROS 2's initialpose, which expects no answer
+  std::string source;            ///< the topic it came from, for messages
+};
+
+/// The answer to one request (Reply topic).
+struct ReplySample {
+  std::uint64_t request_id = 0;
+  std::string verb;  ///< the request's verb, "set_pose" for a SetPose
+  bool ok = false;   ///< done or accepted; false: refused
+  std::string text;  ///< what was done, or why it was refused
 };
 
 /// Calibrated geometry of one module with one-sigma uncertainties.
@@ -88,6 +106,8 @@ struct DdsCallbacks {
   std::function<DiagnosticsSample()> read_diagnostics{};
   /// A request ("reload", ...) for this robot.
   std::function<void(const RequestSample&)> on_request{};
+  /// A pose to set for this robot (SetPose, or ROS 2 initialpose when enabled).
+  std::function<void(const SetPoseSample&)> on_set_pose{};
 };
 
 /// Counters of the bridge's own work, for diagnostics and tests.
@@ -97,7 +117,8 @@ struct BridgeCounters {
   std::uint64_t commands_dropped = 0;    ///< refused by on_command, or no callback
   std::uint64_t commands_ignored = 0;    ///< addressed to another robot
   std::uint64_t motion_captures_received = 0;
-  std::uint64_t requests_received = 0;
+  std::uint64_t requests_received = 0;   ///< Request and SetPose (initialpose included)
+  std::uint64_t replies_published = 0;
 };
 
 class DdsBridge {
@@ -120,6 +141,11 @@ class DdsBridge {
   /// Writes one CalibrationResult now (any thread). @throws DdsError
   void publish_calibration(const CalibrationSample& sample);
 
+  /// Writes one Reply now (any thread). The newest replies stay registered so that a
+  /// reliable reader still gets them; older instances are unregistered, which bounds the
+  /// writer's memory however many requests arrive. @throws DdsError
+  void publish_reply(const ReplySample& reply);
+
   [[nodiscard]] BridgeCounters counters() const;
   [[nodiscard]] const std::string& robot_id() const { return robot_id_; }
   [[nodiscard]] const DdsOptions& options() const { return options_; }
@@ -135,6 +161,8 @@ class DdsBridge {
   void take_ros2_commands();
   void take_motion_capture();
   void take_requests();
+  void take_set_poses();
+  void take_ros2_initialposes();
   void deliver_command(const Twist2& twist);
 
   DdsOptions options_;
@@ -150,10 +178,15 @@ class DdsBridge {
   std::atomic<std::uint64_t> commands_ignored_{0};
   std::atomic<std::uint64_t> motion_captures_received_{0};
   std::atomic<std::uint64_t> requests_received_{0};
+  std::atomic<std::uint64_t> replies_published_{0};
   std::uint64_t next_command_sequence_ = 0;  ///< subscriber thread only
 };
 
 /// Fills a ROS 2 style quaternion (x, y, z, w) for a rotation of `yaw_rad` about z.
 void yaw_to_quaternion(double yaw_rad, double& x, double& y, double& z, double& w) noexcept;
+
+/// The rotation about z of a quaternion (x, y, z, w), rad; NaN when it is not a rotation
+/// (a norm far from 1, or not finite).
+double quaternion_to_yaw(double x, double y, double z, double w) noexcept;
 
 }  // namespace swivel::dds

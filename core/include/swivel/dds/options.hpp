@@ -8,8 +8,9 @@
 
 namespace swivel::dds {
 
-/// ROS 2 compatibility: odometry as nav_msgs/Odometry on rt/<namespace>/odom and
-/// geometry_msgs/Twist commands from rt/<namespace>/cmd_vel.
+/// ROS 2 compatibility: odometry as nav_msgs/Odometry on rt/<namespace>/odom,
+/// geometry_msgs/Twist commands from rt/<namespace>/cmd_vel and
+/// geometry_msgs/PoseWithCovarianceStamped poses from rt/<namespace>/initialpose.
 struct Ros2Options {
   bool enabled = false;
   std::string ros_namespace;               ///< "" or e.g. "robot1" (no leading/trailing '/')
@@ -20,6 +21,8 @@ struct Ros2Options {
   [[nodiscard]] std::string odom_topic() const;
   /// "rt/cmd_vel" or "rt/<namespace>/cmd_vel".
   [[nodiscard]] std::string cmd_vel_topic() const;
+  /// "rt/initialpose" or "rt/<namespace>/initialpose".
+  [[nodiscard]] std::string initialpose_topic() const;
 };
 
 struct DdsOptions {

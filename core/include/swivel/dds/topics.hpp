@@ -20,6 +20,8 @@ inline constexpr const char* kCalibrationResultTopic = "swivel_calibration_resul
 inline constexpr const char* kVelocityCommandTopic = "swivel_velocity_command";
 inline constexpr const char* kMotionCaptureTopic = "swivel_motion_capture";
 inline constexpr const char* kRequestTopic = "swivel_command";
+inline constexpr const char* kSetPoseTopic = "swivel_set_pose";
+inline constexpr const char* kReplyTopic = "swivel_reply";
 
 /// A DDS call failed; the message names the call and Cyclone's return code.
 class DdsError : public std::runtime_error {
