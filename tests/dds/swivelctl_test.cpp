@@ -90,7 +90,25 @@ class FakeDaemon {
                          },
                      .on_request =
                          [this](const RequestSample& r) {
-                           if (r.verb == "reload") ++reloads_;
+                           // Answered as swiveld answers: a Reply with the request's id.
+                           ReplySample reply{r.request_id, r.verb, true, ""};
+                           if (r.verb == "reload") {
+                             ++reloads_;
+                             reply.text = "applied localization raw_eg -> kalman";
+                           } else if (r.verb == "clear") {
+                             reply.ok = false;
+                             reply.text =
+                                 "refused: hardware_error persists (sim: hardware not answering)";
+                           }
+                           bridge_->publish_reply(reply);
+                         },
+                     .on_set_pose =
+                         [this](const SetPoseSample& p) {
+                           {
+                             const std::scoped_lock lock(mutex_);
+                             poses_.push_back(p);
+                           }
+                           bridge_->publish_reply({p.request_id, "set_pose", true, "pose set"});
                          }});
     bridge_->start();
   }
@@ -99,12 +117,17 @@ class FakeDaemon {
     const std::scoped_lock lock(mutex_);
     return commands_;
   }
+  std::vector<SetPoseSample> poses() {
+    const std::scoped_lock lock(mutex_);
+    return poses_;
+  }
 
  private:
   std::atomic<std::uint64_t> cycle_{0};
   std::atomic<std::uint32_t> reloads_{0};
   std::mutex mutex_;
   std::vector<VelocityCommand> commands_;
+  std::vector<SetPoseSample> poses_;
   std::unique_ptr<DdsBridge> bridge_;
 };
 
@@ -183,7 +206,44 @@ TEST(Swivelctl, ReloadReportsTheDaemonsAnswer) {
   const RunResult r = swivelctl("reload --timeout 10 --robot " + robot);
 
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out, robot + ": reload applied: localization: kalman\n");
+  EXPECT_EQ(r.out, robot + ": reload applied: applied localization raw_eg -> kalman\n");
+}
+
+TEST(Swivelctl, ClearPrintsTheRefusalAndExitsOne) {
+  const std::string robot = unique_robot_id("clear");
+  FakeDaemon daemon(robot);
+
+  const RunResult r = swivelctl("clear --timeout 10 --robot " + robot);
+
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.out,
+            robot + ": clear: refused: hardware_error persists (sim: hardware not answering)\n");
+}
+
+TEST(Swivelctl, SetPoseSendsThePoseAndItsSigmas) {
+  const std::string robot = unique_robot_id("set_pose");
+  FakeDaemon daemon(robot);
+
+  const RunResult r =
+      swivelctl("set-pose -1.5 2 -0.25 --sigma 0.1 0.2 0.05 --timeout 10 --robot " + robot);
+  const RunResult bare = swivelctl("set-pose 3 4 0 --timeout 10 --robot " + robot);
+  const RunResult bad = swivelctl("set-pose 3 4 0 --sigma 0.1 -0.2 0.05 --robot " + robot);
+
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, robot + ": set-pose: pose set\n");
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--sigma: standard deviations must be finite and >= 0"),
+            std::string::npos)
+      << bad.err;
+  const auto poses = daemon.poses();
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[0].pose.pose.x_m, -1.5);
+  EXPECT_EQ(poses[0].pose.pose.y_m, 2.0);
+  EXPECT_EQ(poses[0].pose.pose.yaw_rad, -0.25);
+  EXPECT_TRUE(poses[0].pose.has_covariance);
+  EXPECT_NEAR(poses[0].pose.covariance[4], 0.04, 1e-15);
+  EXPECT_FALSE(poses[1].pose.has_covariance);
 }
 
 TEST(Swivelctl, ExitsNonZeroWhenNothingAnswers) {

@@ -10,6 +10,7 @@
 
 #include "client.hpp"
 #include "format.hpp"
+#include "request.hpp"
 #include "swivel.h"
 #include "swivel/dds/topics.hpp"
 
@@ -27,7 +28,7 @@ struct CalibrateOptions {
   bool json = false;
 };
 
-struct Answer {
+struct LastStatus {
   std::string status;
   bool received = false;
 };
@@ -55,25 +56,18 @@ int run_calibrate(const CalibrateOptions& o) {
   const std::string robot = resolve_robot(client, o.robot, Seconds(o.timeout_s));
   const dds_entity_t results =
       client.reader(&swivel_msg_CalibrationResult_desc, dds::kCalibrationResultTopic);
-  const dds_entity_t writer = client.writer(&swivel_msg_Request_desc, dds::kRequestTopic);
-  if (!Client::wait_for_match(writer, Seconds(o.timeout_s))) {
-    std::cerr << "swivelctl: robot '" << robot << "' has no request reader (matched none within "
-              << seconds_text(Seconds(o.timeout_s)) << ")\n";
+  // The daemon answers first; progress and results follow as CalibrationResult samples,
+  // which the reader above already receives.
+  const Answer answer = send_request(client, robot, "calibrate", o.action, Seconds(o.timeout_s));
+  if (!answer.ok) {
+    std::cout << robot << ": calibrate " << o.action << ": " << answer.text << '\n';
     return 1;
   }
-  swivel_msg_Request request{};
-  std::string id = robot, verb = "calibrate", argument = o.action;
-  request.robot_id = id.data();
-  request.verb = verb.data();
-  request.argument = argument.data();
-  request.sequence_number = static_cast<unsigned long long>(dds::monotonic_now_s() * 1e3);
-  dds::check(dds_write(writer, &request), "dds_write(request)");
-  dds_wait_for_acks(writer, DDS_SECS(1));
 
   // `start` follows progress until the result (analysis included); the others print the
   // daemon's answer (cancel: until the robot has stopped).
   const bool follow = o.action == "start" ? o.follow : o.action == "cancel";
-  Answer last;
+  LastStatus last;
   const Seconds gap(follow ? std::max(o.timeout_s, 10.0) : o.timeout_s);
   for (;;) {
     if (!client.wait_for_data({results}, gap)) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -14,6 +15,7 @@
 #include "calibrate.hpp"
 #include "client.hpp"
 #include "format.hpp"
+#include "request.hpp"
 #include "swivel.h"
 #include "swivel/dds/topics.hpp"
 
@@ -215,65 +217,45 @@ int run_status(const CommonOptions& common, bool json) {
   return 0;
 }
 
-int run_reload(const CommonOptions& common) {
+// One request, its answer on stdout ("<robot>: <answer>"); 1 when refused.
+template <typename Send>
+int run_request(const CommonOptions& common, const Send& send,
+                const std::function<std::string(const Answer&)>& line) {
   Client client(common.domain_id);
   const std::string robot = resolve_robot(client, common.robot, Seconds(common.timeout_s));
-  const dds_entity_t diagnostics =
-      client.reader(&swivel_msg_Diagnostics_desc, dds::kDiagnosticsTopic);
-  const dds_entity_t writer = client.writer(&swivel_msg_Request_desc, dds::kRequestTopic);
-  const Seconds timeout(common.timeout_s);
+  const Answer answer = send(client, robot, Seconds(common.timeout_s));
+  std::cout << robot << ": " << line(answer) << '\n';
+  return answer.ok ? 0 : 1;
+}
 
-  // The reload count before the request tells the answer apart from older reports.
-  std::optional<std::uint32_t> before;
-  auto take_reload = [&](std::optional<std::uint32_t>& count, bool& ok, std::string& result) {
-    Client::take(diagnostics, [&](const void* p) {
-      const auto& d = *static_cast<const swivel_msg_Diagnostics*>(p);
-      if (robot != d.robot_id) return;
-      count = d.reload_count;
-      ok = d.last_reload_ok;
-      result = d.last_reload_result;
-    });
-  };
-  bool ok = false;
-  std::string result;
-  const auto start = std::chrono::steady_clock::now();
-  while (!before && std::chrono::steady_clock::now() - start < timeout && !interrupted()) {
-    client.wait_for_data({diagnostics}, Seconds(0.1));
-    take_reload(before, ok, result);
-  }
-  if (!before) {
-    std::cerr << "swivelctl: robot '" << robot << "' published no diagnostics within "
-              << seconds_text(timeout) << "\n";
-    return 1;
-  }
-  if (!Client::wait_for_match(writer, timeout)) {
-    std::cerr << "swivelctl: robot '" << robot << "' has no request reader (matched none within "
-              << seconds_text(timeout) << ")\n";
-    return 1;
-  }
-  swivel_msg_Request request{};
-  std::string id = robot, verb = "reload", argument;
-  request.robot_id = id.data();
-  request.verb = verb.data();
-  request.argument = argument.data();
-  request.sequence_number = 1;
-  dds::check(dds_write(writer, &request), "dds_write(request)");
-  dds_wait_for_acks(writer, DDS_SECS(1));
+int run_reload(const CommonOptions& common) {
+  return run_request(
+      common,
+      [](Client& client, const std::string& robot, Seconds timeout) {
+        return send_request(client, robot, "reload", "", timeout);
+      },
+      [](const Answer& a) {
+        return std::string("reload ") + (a.ok ? "applied" : "rejected") +
+               (a.text.empty() ? "" : ": " + a.text);
+      });
+}
 
-  std::optional<std::uint32_t> after;
-  const auto sent = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - sent < timeout && !interrupted()) {
-    client.wait_for_data({diagnostics}, Seconds(0.1));
-    take_reload(after, ok, result);
-    if (after && *after != *before) {
-      std::cout << robot << ": reload " << (ok ? "applied" : "rejected")
-                << (result.empty() ? "" : ": " + result) << '\n';
-      return ok ? 0 : 1;
-    }
-  }
-  std::cerr << "swivelctl: robot '" << robot << "' received the reload request but reported no "
-            << "result within " << seconds_text(timeout) << "\n";
-  return 1;
+int run_clear(const CommonOptions& common) {
+  return run_request(
+      common,
+      [](Client& client, const std::string& robot, Seconds timeout) {
+        return send_request(client, robot, "clear", "", timeout);
+      },
+      [](const Answer& a) { return "clear: " + a.text; });
+}
+
+int run_set_pose(const PoseRequest& pose, const CommonOptions& common) {
+  return run_request(
+      common,
+      [&](Client& client, const std::string& robot, Seconds timeout) {
+        return send_set_pose(client, robot, pose, timeout);
+      },
+      [](const Answer& a) { return "set-pose: " + a.text; });
 }
 
 }  // namespace
@@ -327,6 +309,26 @@ int main(int argc, char** argv) {
   CLI::App* reload = app.add_subcommand("reload", "ask a daemon to re-read its configuration");
   add_common(reload, true);
 
+  CLI::App* clear = app.add_subcommand(
+      "clear", "leave the active fault once its cause is gone (refused, with the cause, while "
+               "it persists)");
+  add_common(clear, true);
+
+  PoseRequest pose;
+  std::vector<double> sigma;
+  CLI::App* set_pose = app.add_subcommand(
+      "set-pose", "set the pose estimate through the active localization's hand-over");
+  set_pose->add_option("x", pose.pose.x_m, "position x, m, world frame")->required();
+  set_pose->add_option("y", pose.pose.y_m, "position y, m, world frame")->required();
+  set_pose->add_option("yaw", pose.pose.yaw_rad, "heading, rad, counter-clockwise positive")
+      ->required();
+  set_pose
+      ->add_option("--sigma", sigma,
+                   "standard deviations SX_M SY_M SYAW_RAD (default: the localization keeps "
+                   "its own uncertainty)")
+      ->expected(3);
+  add_common(set_pose, true);
+
   add_calibrate_command(app);
 
   CLI11_PARSE(app, argc, argv);
@@ -342,6 +344,27 @@ int main(int argc, char** argv) {
     }
     if (*status) return run_status(common, json);
     if (*reload) return run_reload(common);
+    if (*clear) return run_clear(common);
+    if (*set_pose) {
+      if (!std::isfinite(pose.pose.x_m) || !std::isfinite(pose.pose.y_m) ||
+          !std::isfinite(pose.pose.yaw_rad)) {
+        std::cerr << "swivelctl: x, y and yaw must be finite\n";
+        return 2;
+      }
+      if (!sigma.empty()) {
+        for (const double s : sigma) {
+          if (!std::isfinite(s) || s < 0.0) {
+            std::cerr << "swivelctl: --sigma: standard deviations must be finite and >= 0\n";
+            return 2;
+          }
+        }
+        pose.has_sigma = true;
+        pose.sigma_x_m = sigma[0];
+        pose.sigma_y_m = sigma[1];
+        pose.sigma_yaw_rad = sigma[2];
+      }
+      return run_set_pose(pose, common);
+    }
   } catch (const std::exception& e) {
     std::cerr << "swivelctl: " << e.what() << '\n';
     return 1;
