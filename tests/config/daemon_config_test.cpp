@@ -125,6 +125,21 @@ TEST_F(DaemonConfigTest, DefaultsFillOptionalSections) {
   EXPECT_TRUE(c.plugin_path.empty());
   EXPECT_FALSE(c.dds.IsDefined() && c.dds.IsMap());
   EXPECT_FALSE(c.has_calibration());
+  EXPECT_EQ(c.controlled_stop.linear_deceleration_mps2, 1.0);
+  EXPECT_EQ(c.controlled_stop.angular_deceleration_radps2, 2.0);
+}
+
+TEST_F(DaemonConfigTest, ControlledStopDecelerationsAreReadAndRangeChecked) {
+  const DaemonConfig c = load(replaced(
+      kValid, "plugin_path:",
+      "controlled_stop: {linear_deceleration_mps2: 0.4, angular_deceleration_radps2: 1.5}\n"
+      "plugin_path:"));
+  EXPECT_EQ(c.controlled_stop.linear_deceleration_mps2, 0.4);
+  EXPECT_EQ(c.controlled_stop.angular_deceleration_radps2, 1.5);
+  EXPECT_EQ(error_of(replaced(kValid, "plugin_path:",
+                              "controlled_stop: {linear_deceleration_mps2: 0}\nplugin_path:")),
+            "swiveld.yaml:21:19: controlled_stop.linear_deceleration_mps2: expected a number in "
+            "[0.01, 100], got 0");
 }
 
 TEST_F(DaemonConfigTest, CalibrationSectionIsOptionalAndValidated) {
@@ -177,7 +192,8 @@ TEST_F(DaemonConfigTest, UnknownKeyListsKnownKeys) {
             "realtime)");
   EXPECT_EQ(error_of(replaced(kValid, "status:", "stats:")),
             "swiveld.yaml:23:1: stats: unknown key (known: loop, robot_model, hardware, "
-            "drivetrain, localization, calibration, command, plugin_path, logging, status, dds)");
+            "drivetrain, localization, calibration, command, controlled_stop, plugin_path, "
+            "logging, status, dds)");
 }
 
 TEST_F(DaemonConfigTest, WrongTypeShowsValue) {

@@ -17,6 +17,7 @@
 #include "config_watcher.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/dds/bridge.hpp"
+#include "swivel/dds/topics.hpp"
 #include "swivel/rt/control_loop.hpp"
 #include "swivel/run_log.hpp"
 
@@ -113,6 +114,36 @@ const char* drivetrain_name(DrivetrainKind kind) {
   return kind == DrivetrainKind::kSwpc ? "swpc" : "differential";
 }
 
+// Hardware::activate() with its exceptions caught: "" when it succeeded, else why not.
+std::string activate_hardware(Hardware& hardware) {
+  try {
+    if (hardware.activate() == Status::kOk) return "";
+    const std::string reason = hardware.last_error();
+    return reason.empty() ? "no reason given" : reason;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown exception";
+  }
+}
+
+bool finite_pose(const PoseEstimate& p) {
+  if (!std::isfinite(p.pose.x_m) || !std::isfinite(p.pose.y_m) || !std::isfinite(p.pose.yaw_rad)) {
+    return false;
+  }
+  if (!p.has_covariance) return true;
+  for (const double v : p.covariance) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+std::string format(const char* pattern, double a, double b, double c) {
+  char text[160];
+  std::snprintf(text, sizeof text, pattern, a, b, c);
+  return text;
+}
+
 timespec to_timespec(double seconds) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(seconds);
@@ -182,8 +213,20 @@ void Daemon::start() {
   loop_options.fifo_priority = config_.fifo_priority;
   loop_options.realtime = config_.realtime;
   loop_options.command_timeout_s = config_.command.timeout_s;
+  loop_options.limits = config_.robot.limits;
+  loop_options.stop_linear_deceleration_mps2 = config_.controlled_stop.linear_deceleration_mps2;
+  loop_options.stop_angular_deceleration_radps2 =
+      config_.controlled_stop.angular_deceleration_radps2;
   loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
                                             *localization_, config_.localization.plugin.c_str());
+  // inactive -> active, off the loop and before its first cycle.
+  if (const std::string refusal = activate_hardware(*hardware_); !refusal.empty()) {
+    loop_.reset();
+    throw PluginError(config_.hardware.where + " plugin '" + config_.hardware.plugin +
+                      "' refused to activate: " + refusal);
+  }
+  hardware_active_ = true;
+  spdlog::info("hardware {} activated", config_.hardware.plugin);
   start_s_ = monotonic_now_s();
   std::set<std::string> seen;
   for (const auto& warning : loop_->start()) {
@@ -246,7 +289,10 @@ void Daemon::start_bridge() {
   // push_command has one producer: DDS commands drive the robot only when the daemon has no
   // command source of its own.
   if (config_.command.source == CommandSource::kNone) {
-    callbacks.on_command = [this](const VelocityCommand& c) { return loop_->push_command(c); };
+    // Refused (counted as dropped) once stop() began.
+    callbacks.on_command = [this](const VelocityCommand& c) {
+      return !stopping_.load(std::memory_order_acquire) && loop_->push_command(c);
+    };
   } else {
     spdlog::info("DDS velocity commands are ignored: command.source is 'script'");
   }
@@ -254,15 +300,9 @@ void Daemon::start_bridge() {
     return loop_->push_motion_capture(m);
   };
   callbacks.read_diagnostics = [this] { return read_diagnostics(); };
-  callbacks.on_request = [this](const dds::RequestSample& request) {
-    if (request.verb == "reload") {
-      request_reload();
-    } else if (request.verb == "calibrate") {
-      handle_calibrate_request(request.argument);
-    } else {
-      spdlog::warn("DDS request '{}' is not supported; ignored", request.verb);
-    }
-  };
+  // Answered on the main thread, one at a time, in the order they came.
+  callbacks.on_request = [this](const dds::RequestSample& request) { queue_request(request); };
+  callbacks.on_set_pose = [this](const dds::SetPoseSample& pose) { queue_request(pose); };
   bridge_ = std::make_unique<dds::DdsBridge>(dds_options_, config_.robot.name,
                                              std::move(callbacks));
   bridge_->start();
@@ -285,21 +325,211 @@ std::string Daemon::calibration_refusal() const {
          config_.file + " and restart swiveld";
 }
 
-void Daemon::handle_calibrate_request(const std::string& argument) {
-  spdlog::info("calibrate {} requested", argument.empty() ? "status" : argument);
-  if (calibration_) {
-    try {
-      calibration_->handle_request(argument);
-    } catch (const std::exception& e) {
-      spdlog::error("calibrate {}: {}", argument, e.what());
+void Daemon::queue_request(PendingRequest request) {
+  constexpr std::size_t kMaxPending = 64;
+  {
+    const std::lock_guard lock(requests_mutex_);
+    if (pending_requests_.size() < kMaxPending) {
+      pending_requests_.push_back(std::move(request));
+      return;
     }
-    return;
   }
-  dds::CalibrationSample answer;
-  answer.status = "failed";
-  answer.text = calibration_refusal();
-  spdlog::warn("calibrate: {}", answer.text);
-  publish_calibration(answer);
+  // A flood of requests: answer the newest at once rather than queue without bound.
+  dds::ReplySample busy;
+  if (const auto* r = std::get_if<dds::RequestSample>(&request)) {
+    busy.request_id = r->request_id;
+    busy.verb = r->verb;
+  } else {
+    const auto& p = std::get<dds::SetPoseSample>(request);
+    if (!p.wants_reply) return;
+    busy.request_id = p.request_id;
+    busy.verb = "set_pose";
+  }
+  busy.text = "refused: " + std::to_string(kMaxPending) + " requests are waiting; try again";
+  if (bridge_) bridge_->publish_reply(busy);
+}
+
+void Daemon::process_requests() {
+  for (;;) {
+    PendingRequest next;
+    {
+      const std::lock_guard lock(requests_mutex_);
+      if (pending_requests_.empty()) return;
+      next = std::move(pending_requests_.front());
+      pending_requests_.pop_front();
+    }
+    dds::ReplySample reply;
+    bool wants_reply = true;
+    if (const auto* r = std::get_if<dds::RequestSample>(&next)) {
+      reply = handle_request(*r);
+    } else {
+      const auto& p = std::get<dds::SetPoseSample>(next);
+      reply = set_pose(p);
+      wants_reply = p.wants_reply;
+    }
+    if (!wants_reply || !bridge_) continue;
+    try {
+      bridge_->publish_reply(reply);
+    } catch (const std::exception& e) {
+      spdlog::error("reply to {} request {} not published: {}", reply.verb, reply.request_id,
+                    e.what());
+    }
+  }
+}
+
+dds::ReplySample Daemon::handle_request(const dds::RequestSample& request) {
+  dds::ReplySample reply;
+  if (stopping_.load(std::memory_order_acquire)) {
+    reply.text = "refused: swiveld is stopping";
+  } else if (request.verb == "reload") {
+    const ReloadResult result = reload("reload request");
+    reply.ok = result.ok;
+    reply.text = result.text;
+  } else if (request.verb == "clear") {
+    reply = clear_fault(request.request_id);
+  } else if (request.verb == "calibrate") {
+    reply = calibrate(request.argument);
+  } else {
+    reply.text = "refused: unknown request '" + request.verb +
+                 "' (reload, clear, calibrate; a pose goes to " + dds::kSetPoseTopic + ")";
+  }
+  reply.request_id = request.request_id;
+  reply.verb = request.verb;
+  if (reply.ok) {
+    spdlog::info("{} request {}: {}", request.verb, request.request_id, reply.text);
+  } else {
+    spdlog::warn("{} request {}: {}", request.verb, request.request_id, reply.text);
+  }
+  return reply;
+}
+
+bool Daemon::wait_for_loop_reply(std::uint64_t id, rt::LoopReply& out) {
+  // The loop answers at its next cycle; a second covers a stalled or very slow loop.
+  const double deadline_s = monotonic_now_s() + 1.0;
+  while (monotonic_now_s() < deadline_s && loop_->running()) {
+    if (loop_->take_reply(out) && out.id == id) return true;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  return false;
+}
+
+dds::ReplySample Daemon::clear_fault(std::uint64_t request_id) {
+  dds::ReplySample reply;
+  reply.request_id = request_id;
+  reply.verb = "clear";
+  if (loop_->latest().hardware_in_error) {
+    // The hardware left its active state: activate it again off the loop, with the loop's
+    // calls to it paused at a cycle boundary (granted once the robot stands still).
+    constexpr double kPauseTimeoutS = 5.0;
+    if (!loop_->pause_hardware(kPauseTimeoutS)) {
+      reply.text =
+          "refused: hardware_error: the hardware could not be paused for re-activation "
+          "(the robot has not come to rest: its last setpoints were not zero); try again";
+      return reply;
+    }
+    const std::string refusal = activate_hardware(*hardware_);
+    loop_->resume_hardware();
+    if (!refusal.empty()) {
+      reply.text = "refused: hardware plugin '" + config_.hardware.plugin +
+                   "' refused to re-activate: " + refusal;
+      return reply;
+    }
+    spdlog::info("hardware {} re-activated", config_.hardware.plugin);
+  }
+  const std::uint64_t id = ++loop_request_id_;
+  loop_->request_clear(id);
+  rt::LoopReply answer;
+  if (!wait_for_loop_reply(id, answer)) {
+    reply.text = "refused: the real-time loop did not answer within 1 s";
+    return reply;
+  }
+  const std::string fault = fault_code_name(answer.fault);
+  const std::string cause = answer.detail.data();
+  reply.ok = answer.ok;
+  if (answer.ok) {
+    reply.text = answer.fault == FaultCode::kNone ? "nothing to clear"
+                                                  : "cleared " + fault + " (" + cause + ")";
+  } else if (answer.fault == FaultCode::kCommandTimeout) {
+    reply.text = "refused: " + fault + " persists (" + cause +
+                 "): no fresh velocity command; the next one resumes by itself";
+  } else {
+    reply.text = "refused: " + fault + " persists (" + cause + ")";
+  }
+  return reply;
+}
+
+dds::ReplySample Daemon::set_pose(const dds::SetPoseSample& request) {
+  dds::ReplySample reply;
+  reply.request_id = request.request_id;
+  reply.verb = "set_pose";
+  const PoseEstimate& p = request.pose;
+  const auto& c = p.covariance;
+  if (stopping_.load(std::memory_order_acquire)) {
+    reply.text = "refused: swiveld is stopping";
+  } else if (!finite_pose(p)) {
+    reply.text = "refused: the pose (x_m, y_m, yaw_rad) and its covariance must be finite";
+  } else if (p.has_covariance && (c[0] < 0.0 || c[4] < 0.0 || c[8] < 0.0)) {
+    reply.text = "refused: negative variance (x " + std::to_string(c[0]) + " m^2, y " +
+                 std::to_string(c[4]) + " m^2, yaw " + std::to_string(c[8]) + " rad^2)";
+  } else {
+    const std::uint64_t id = ++loop_request_id_;
+    loop_->request_set_pose(p, id);
+    rt::LoopReply answer;
+    const std::string plugin = loop_->latest().localization_plugin.data();
+    if (!wait_for_loop_reply(id, answer)) {
+      reply.text = "refused: the real-time loop did not answer within 1 s";
+    } else if (!answer.ok) {
+      reply.text = "refused by localization '" + plugin + "': " + answer.detail.data();
+    } else {
+      reply.ok = true;
+      reply.text = format("pose set to x=%.3f m y=%.3f m yaw=%.3f rad", p.pose.x_m, p.pose.y_m,
+                          p.pose.yaw_rad) +
+                   (p.has_covariance ? format(", sigma x=%.3g m y=%.3g m yaw=%.3g rad",
+                                              std::sqrt(c[0]), std::sqrt(c[4]), std::sqrt(c[8]))
+                                     : std::string(", uncertainty kept")) +
+                   " (localization " + plugin + ")";
+    }
+  }
+  if (reply.ok) {
+    spdlog::info("set pose from {}: {}", request.source, reply.text);
+  } else {
+    spdlog::warn("set pose from {}: {}", request.source, reply.text);
+  }
+  return reply;
+}
+
+dds::ReplySample Daemon::calibrate(const std::string& argument) {
+  dds::ReplySample reply;
+  reply.verb = "calibrate";
+  spdlog::info("calibrate {} requested", argument.empty() ? "status" : argument);
+  if (!calibration_) {
+    dds::CalibrationSample answer;
+    answer.status = "failed";
+    answer.text = calibration_refusal();
+    publish_calibration(answer);
+    reply.text = answer.text;
+    return reply;
+  }
+  try {
+    if (argument == "start") {
+      const std::string refusal = calibration_->start();  // publishes either way
+      reply.ok = refusal.empty();
+      reply.text = reply.ok ? "calibration started" : "refused: " + refusal;
+    } else if (argument == "cancel" || argument == "status" || argument.empty()) {
+      calibration_->handle_request(argument);
+      const dds::CalibrationSample status = calibration_->status();
+      reply.ok = true;
+      reply.text = (argument == "cancel" ? "cancel requested; " : "") + status.status + ": " +
+                   status.text;
+    } else {
+      calibration_->handle_request(argument);
+      reply.text = "refused: unknown calibrate argument '" + argument +
+                   "' (start | cancel | status)";
+    }
+  } catch (const std::exception& e) {
+    reply.text = "refused: " + std::string(e.what());
+  }
+  return reply;
 }
 
 void Daemon::publish_calibration(const dds::CalibrationSample& sample) noexcept {
@@ -354,6 +584,83 @@ dds::DiagnosticsSample Daemon::read_diagnostics() {
   return d;
 }
 
+// The controlled stop: commands ignored, the twist ramped to zero within the stop's limits
+// while the loop runs; waits until the robot stands still, or a bound on the ramp's time.
+void Daemon::bring_to_rest() noexcept {
+  if (!loop_ || !loop_->running()) return;
+  loop_->request_controlled_stop(monotonic_now_s());  // no-op when the signal asked already
+  try {
+    const StateSnapshot from = loop_->latest();
+    const MotionLimits& limits = config_.robot.limits;
+    const double a_linear =
+        limits.linear_acceleration_mps2.value_or(config_.controlled_stop.linear_deceleration_mps2);
+    const double a_angular = limits.angular_acceleration_radps2.value_or(
+        config_.controlled_stop.angular_deceleration_radps2);
+    const Twist2& v = from.command_twist;
+    double ramp_s = std::max({std::abs(v.vx_mps) / a_linear, std::abs(v.vy_mps) / a_linear,
+                              std::abs(v.wz_radps) / a_angular});
+    if (limits.linear_jerk_mps3) ramp_s += a_linear / *limits.linear_jerk_mps3;
+    if (limits.angular_jerk_radps3) ramp_s += a_angular / *limits.angular_jerk_radps3;
+    const double limit_s = ramp_s + 1.0;  // and the drives' own lag
+    spdlog::info("stopping: bringing the robot to rest from vx={:.3f} m/s vy={:.3f} m/s "
+                 "wz={:.3f} rad/s (controlled stop at {} m/s^2, {} rad/s^2)",
+                 v.vx_mps, v.vy_mps, v.wz_radps, a_linear, a_angular);
+    const double start_s = monotonic_now_s();
+    for (;;) {
+      const StateSnapshot s = loop_->latest();
+      const Twist2& c = s.command_twist;
+      const Twist2& m = s.odometry_twist;
+      const bool commanded_zero = c.vx_mps == 0.0 && c.vy_mps == 0.0 && c.wz_radps == 0.0;
+      const bool measured_still = std::hypot(m.vx_mps, m.vy_mps) < 0.005 && std::abs(m.wz_radps) < 0.01;
+      if (s.stopping && commanded_zero && measured_still) {
+        if (s.has_truth && from.has_truth) {
+          spdlog::info("robot at rest after {:.3f} s; it travelled {:.4f} m meanwhile "
+                       "(simulator's ground truth)",
+                       s.stamp_s - from.stamp_s,
+                       std::hypot(s.truth.x_m - from.truth.x_m, s.truth.y_m - from.truth.y_m));
+        } else {
+          spdlog::info("robot at rest after {:.3f} s", s.stamp_s - from.stamp_s);
+        }
+        return;
+      }
+      if (monotonic_now_s() - start_s > limit_s || !loop_->running()) {
+        spdlog::error("the robot did not come to rest within {:.2f} s; stopping the loop anyway "
+                      "(zero setpoints at once)",
+                      limit_s);
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  } catch (const std::exception& e) {
+    try {
+      spdlog::error("controlled stop: {}", e.what());
+    } catch (...) {
+    }
+  }
+}
+
+void Daemon::deactivate_hardware() noexcept {
+  if (!hardware_active_) return;
+  hardware_active_ = false;
+  try {
+    std::string failure;
+    try {
+      if (hardware_->deactivate() != Status::kOk) {
+        failure = hardware_->last_error();
+        if (failure.empty()) failure = "no reason given";
+      }
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+    if (failure.empty()) {
+      spdlog::info("hardware {} deactivated", config_.hardware.plugin);
+    } else {
+      spdlog::error("hardware {} failed to deactivate: {}", config_.hardware.plugin, failure);
+    }
+  } catch (...) {
+  }
+}
+
 void Daemon::stop() noexcept {
   const bool was_running = loop_ != nullptr;
   if (was_running && notifier_.enabled()) {
@@ -362,28 +669,36 @@ void Daemon::stop() noexcept {
     } catch (...) {
     }
   }
-  watcher_.reset();
-  // The subscriber thread may call the runner, and the runner publishes through the bridge:
-  // stop the bridge's threads first, cancel a running calibration while the loop still
-  // runs (the runner waits for the loop to hand it back), then delete the bridge.
-  if (bridge_) bridge_->stop();
-  calibration_.reset();
-  bridge_.reset();
+  // 1. No more commands: DDS commands are dropped from now on, the script stops, and the
+  //    loop ignores whatever reaches it once the controlled stop began.
+  stopping_.store(true, std::memory_order_release);
   if (command_thread_.joinable()) {
     command_thread_.request_stop();
     command_thread_.join();
   }
+  // 2. The robot to rest while the loop runs, then the loop's final cycle (zero setpoints).
+  //    A calibration is cancelled by the controlled stop; the runner takes it back below.
+  if (loop_) {
+    bring_to_rest();
+    loop_->stop();
+  }
+  // 3. The drives off.
+  deactivate_hardware();
+  // 4. Only now everything around the loop. The bridge's threads stop before the runner is
+  //    destroyed, since the runner publishes through the bridge.
+  watcher_.reset();
+  if (bridge_) bridge_->stop();
+  calibration_.reset();
+  bridge_.reset();
   if (recorder_thread_.joinable()) {
     recorder_thread_.request_stop();
     recorder_thread_.join();
   }
   if (loop_) {
-    loop_->stop();
-    // A swap the loop never took: the instance was not used, the outgoing one still is.
-    collect_retired_localization();
+    (void)collect_retired_localization();
     loop_.reset();
   }
-  retiring_.reset();
+  incoming_.reset();  // a swap the loop never took: the instance was never used
   if (recorder_) {
     try {
       recorder_->writer->flush();
@@ -462,15 +777,28 @@ void Daemon::run_recorder(const std::stop_token& stop) {
   }
 }
 
-void Daemon::collect_retired_localization() noexcept {
-  if (!loop_ || !retiring_) return;
-  Localization* retired = loop_->take_retired_localization();
-  if (retired == nullptr) return;
-  if (retired == retiring_.get()) {
-    retiring_.reset();  // the loop let go of it: destroy it, then its library may unload
-  } else {
-    spdlog::error("hot swap: the loop retired an unexpected localization instance");
+Daemon::SwapResult Daemon::collect_retired_localization(std::string* refusal) noexcept {
+  if (!loop_ || !incoming_) return SwapResult::kPending;
+  rt::SwapOutcome outcome;
+  Localization* retired = loop_->take_retired_localization(&outcome);
+  if (retired == nullptr) return SwapResult::kPending;
+  if (!outcome.taken && retired == incoming_.get()) {
+    // Rolled back: the loop kept the active instance and never used this one.
+    if (refusal != nullptr) *refusal = outcome.refusal.data();
+    incoming_.reset();
+    return SwapResult::kRefused;
   }
+  if (outcome.taken && retired == localization_.get()) {
+    // The loop let go of the outgoing instance: destroy it, then its library may unload.
+    localization_ = std::move(incoming_);
+    config_.localization = incoming_slot_;
+    return SwapResult::kTaken;
+  }
+  try {
+    spdlog::error("hot swap: the loop retired an unexpected localization instance");
+  } catch (...) {
+  }
+  return SwapResult::kPending;
 }
 
 ReloadResult Daemon::reload(const std::string& trigger) {
@@ -500,12 +828,18 @@ ReloadResult Daemon::reload(const std::string& trigger) {
     if (fresh.plugin_path != config_.plugin_path) restart.push_back("plugin_path");
     if (dump(fresh.dds) != dump(config_.dds)) restart.push_back("dds");
     if (!same_slot(fresh.calibration, config_.calibration)) restart.push_back("calibration");
+    if (fresh.controlled_stop.linear_deceleration_mps2 !=
+            config_.controlled_stop.linear_deceleration_mps2 ||
+        fresh.controlled_stop.angular_deceleration_radps2 !=
+            config_.controlled_stop.angular_deceleration_radps2) {
+      restart.push_back("controlled_stop");
+    }
 
     std::vector<std::string> applied;
     const bool swap = !same_slot(fresh.localization, config_.localization);
     if (swap) {
-      if (retiring_) collect_retired_localization();
-      if (retiring_ || loop_->swap_pending()) {
+      (void)collect_retired_localization();
+      if (incoming_ || loop_->swap_pending()) {
         throw PluginError("the previous localization swap has not completed yet; try again");
       }
       // Built and validated in full before anything changes; the robot model stays the one
@@ -529,26 +863,31 @@ ReloadResult Daemon::reload(const std::string& trigger) {
       next->reset(loop_->latest().estimate);
     }
 
-    // Everything validated: apply.
+    // Everything validated: apply. The localization first: its hand-over may refuse.
     if (swap) {
-      if (!loop_->request_localization_swap(next.get(), fresh.localization.plugin.c_str())) {
+      const std::string outgoing = config_.localization.plugin;
+      incoming_ = std::move(next);
+      incoming_slot_ = fresh.localization;
+      if (!loop_->request_localization_swap(incoming_.get(), fresh.localization.plugin.c_str())) {
+        incoming_.reset();
         throw PluginError("the loop refused the localization swap (one is still pending)");
       }
-      retiring_ = std::move(localization_);
-      localization_ = std::move(next);
-      // The loop takes it at its next cycle boundary; wait briefly so that the outgoing
-      // instance is destroyed now rather than at the next reload.
+      // The loop takes it, or rolls it back, at its next cycle boundary.
       const double deadline = monotonic_now_s() + 2.0;
-      while (loop_->swap_pending() && monotonic_now_s() < deadline) {
+      std::string refusal;
+      SwapResult swapped = SwapResult::kPending;
+      while (swapped == SwapResult::kPending && monotonic_now_s() < deadline) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        swapped = collect_retired_localization(&refusal);
       }
-      collect_retired_localization();
-      applied.push_back("localization " + config_.localization.plugin + " -> " +
-                        fresh.localization.plugin +
-                        (config_.localization.plugin == fresh.localization.plugin
-                             ? " (new parameters)"
-                             : ""));
-      config_.localization = fresh.localization;
+      if (swapped == SwapResult::kRefused) {
+        throw PluginError(fresh.localization.where + " plugin '" + fresh.localization.plugin +
+                          "' refused the hand-over: " + refusal + "; '" + outgoing +
+                          "' stays active");
+      }
+      applied.push_back("localization " + outgoing + " -> " + fresh.localization.plugin +
+                        (outgoing == fresh.localization.plugin ? " (new parameters)" : "") +
+                        (swapped == SwapResult::kPending ? " (not taken by the loop yet)" : ""));
     }
     if (fresh.log_level != config_.log_level) {
       spdlog::set_level(spdlog::level::from_str(fresh.log_level));
@@ -610,7 +949,8 @@ int Daemon::run_until_signal(const sigset_t& signals) {
     if (reload_requested_.exchange(false, std::memory_order_acq_rel)) {
       reload("configuration file changed or reload requested");
     }
-    collect_retired_localization();
+    (void)collect_retired_localization();
+    process_requests();
     poll_calibration();
     double wait_s = std::min(kTickS, next_status_s - monotonic_now_s());
     if (watchdog_interval_) wait_s = std::min(wait_s, next_watchdog_s - monotonic_now_s());
@@ -619,6 +959,10 @@ int Daemon::run_until_signal(const sigset_t& signals) {
     if (signal == SIGHUP) {
       reload("SIGHUP");
     } else if (signal > 0) {
+      // Stop first: the loop starts bringing the robot to rest in its next cycle, before
+      // anything else is torn down (stop() does the rest).
+      stopping_.store(true, std::memory_order_release);
+      if (loop_) loop_->request_controlled_stop(monotonic_now_s());
       return signal;
     }
     if (monotonic_now_s() >= next_status_s) {

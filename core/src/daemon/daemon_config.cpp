@@ -126,6 +126,13 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
     command.fail("script", "expected a non-empty list of steps when source is 'script'");
   }
 
+  ParamReader stop = top.child("controlled_stop");
+  c.controlled_stop.linear_deceleration_mps2 = stop.number_or(
+      "linear_deceleration_mps2", c.controlled_stop.linear_deceleration_mps2, 0.01, 100.0);
+  c.controlled_stop.angular_deceleration_radps2 = stop.number_or(
+      "angular_deceleration_radps2", c.controlled_stop.angular_deceleration_radps2, 0.01, 1000.0);
+  stop.finish();
+
   const YAML::Node paths = top.sequence("plugin_path");
   for (std::size_t i = 0; i < paths.size(); ++i) {
     if (!paths[i].IsScalar() || paths[i].Scalar().empty()) {

@@ -4,30 +4,45 @@
 // SIGHUP, DDS `reload` request), the run-log recorder and the status output. main() only
 // parses the command line and blocks the signals.
 //
-// Threads: the main thread (run_until_signal) owns reloads, hot swaps, the watchdog and
-// the calibration's periodic work; the loop thread runs the plugins; the bridge has a
-// publisher and a subscriber thread (which starts and cancels calibrations); the script
-// command source, the recorder and the file watcher have one thread each. Nothing added
-// here runs on the loop thread.
+// Threads: the main thread (run_until_signal) owns reloads, hot swaps, requests, the
+// watchdog and the calibration's periodic work; the loop thread runs the plugins; the
+// bridge has a publisher and a subscriber thread (which queues requests for the main
+// thread); the script command source, the recorder and the file watcher have one thread
+// each. Nothing added here runs on the loop thread.
 //
-// Calibration (`calibration:` in swiveld.yaml): a DDS Request with verb "calibrate" and
-// argument start | cancel | status reaches the CalibrationRunner, which hands the plugin to
-// the loop (mode kCalibration: velocity commands and the script are ignored meanwhile),
-// analyses the recording off the loop and writes the calibrated model next to the nominal
-// one. Progress and results go out as CalibrationResult samples; without a calibration
-// section every calibrate request is answered with status "failed" and the reason.
+// Requests (DDS Request and SetPose, ROS 2 initialpose) are answered one at a time by the
+// main thread, each with a Reply carrying its request id:
+//  - reload: the result of re-reading the configuration;
+//  - clear: the active fault is left when its cause is gone, refused with the cause while
+//    it persists; a hardware in its error state is re-activated first (its calls paused at
+//    a cycle boundary, Hardware::activate() off the loop);
+//  - set_pose: the estimate set through the active localization's hand-over;
+//  - calibrate: start | cancel | status of the CalibrationRunner, which hands the plugin to
+//    the loop (mode kCalibration: velocity commands and the script are ignored meanwhile),
+//    analyses the recording off the loop and writes the calibrated model next to the nominal
+//    one. Progress and results go out as CalibrationResult samples; without a calibration
+//    section every calibrate request is refused with the reason.
+//
+// Hardware lifecycle (swivel/plugin/hardware.hpp): configure() in the constructor,
+// activate() in start() before the loop's first cycle, deactivate() in stop() after its
+// last. On SIGTERM/SIGINT stop() stops the robot first: no more commands, a controlled stop
+// to rest while the loop runs, the loop's final cycle, deactivate(), and only then the
+// watcher, the DDS bridge and the calibration runner.
 
 #include <signal.h>
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
+#include <variant>
 
 #include "swivel/daemon/daemon_config.hpp"
+#include "swivel/dds/bridge.hpp"
 #include "swivel/dds/options.hpp"
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
@@ -37,11 +52,7 @@
 
 namespace swivel::rt {
 class ControlLoop;
-}
-namespace swivel::dds {
-class DdsBridge;
-struct CalibrationSample;
-struct DiagnosticsSample;
+struct LoopReply;
 }
 
 namespace swivel::daemon {
@@ -79,15 +90,19 @@ class Daemon {
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  /// Starts the recorder's file, the real-time loop, the calibration runner (when
-  /// configured), the command source, the DDS bridge and the configuration watcher, then
-  /// notifies READY=1. Logs each real-time warning once.
-  /// @throws RunLogError when the run log cannot be created; DdsError when DDS refuses.
+  /// Starts the recorder's file, activates the hardware, starts the real-time loop, the
+  /// calibration runner (when configured), the command source, the DDS bridge and the
+  /// configuration watcher, then notifies READY=1. Logs each real-time warning once.
+  /// @throws RunLogError when the run log cannot be created; DdsError when DDS refuses;
+  ///         PluginError naming the plugin and its reason when the hardware refuses to
+  ///         activate.
   void start();
 
-  /// Notifies STOPPING=1, stops the watcher, the bridge, a running calibration, the command
-  /// source and the recorder, then the loop (which leaves the robot at zero velocity).
-  /// Idempotent.
+  /// Stops the robot first, then everything else. Notifies STOPPING=1, stops accepting
+  /// commands and requests (the script stops, DDS commands are dropped), brings the robot to
+  /// rest within the controlled stop's limits while the loop still runs, stops the loop
+  /// (its final cycle writes zero setpoints), deactivates the hardware, and only then stops
+  /// the watcher, the bridge, the calibration runner and the recorder. Idempotent.
   void stop() noexcept;
 
   /// Prints a status line every status period, sends the watchdog while the loop advances
@@ -112,16 +127,33 @@ class Daemon {
   /// The loop, once started (null before start() and after stop()).
   [[nodiscard]] rt::ControlLoop* loop() { return loop_.get(); }
 
-  /// Handles the argument of a "calibrate" request (start | cancel | status) and publishes
-  /// the answer as a CalibrationResult. Any non-real-time thread; not the loop thread.
-  void handle_calibrate_request(const std::string& argument);
+  /// Answers one request: verb "reload", "clear" or "calibrate" (argument start | cancel |
+  /// status). Main thread only (the one that runs reloads), while the loop runs. A
+  /// calibrate request also publishes the calibration's status as a CalibrationResult.
+  dds::ReplySample handle_request(const dds::RequestSample& request);
+
+  /// Sets the pose estimate through the active localization's hand-over at a cycle
+  /// boundary; refused (nothing changes) for a non-finite pose or covariance, a negative
+  /// variance, or when the plugin refuses. Main thread only, while the loop runs.
+  dds::ReplySample set_pose(const dds::SetPoseSample& request);
 
  private:
+  using PendingRequest = std::variant<dds::RequestSample, dds::SetPoseSample>;
+
+  void queue_request(PendingRequest request);
+  void process_requests();
+  dds::ReplySample clear_fault(std::uint64_t request_id);
+  dds::ReplySample calibrate(const std::string& argument);
+  bool wait_for_loop_reply(std::uint64_t id, rt::LoopReply& out);
+  void bring_to_rest() noexcept;
+  void deactivate_hardware() noexcept;
   void run_script(const std::stop_token& stop);
   void run_recorder(const std::stop_token& stop);
   void start_bridge();
   dds::DiagnosticsSample read_diagnostics();
-  void collect_retired_localization() noexcept;
+  /// What the loop did with the instance handed over in a swap, once it let go of one.
+  enum class SwapResult { kPending, kTaken, kRefused };
+  SwapResult collect_retired_localization(std::string* refusal = nullptr) noexcept;
   void send_watchdog_if_healthy();
   void poll_calibration() noexcept;
   void publish_calibration(const dds::CalibrationSample& sample) noexcept;
@@ -134,8 +166,11 @@ class Daemon {
   PluginLoader loader_;
   PluginInstance<Hardware> hardware_;
   PluginInstance<Drivetrain> drivetrain_;
-  PluginInstance<Localization> localization_;  // the instance the loop uses (or takes next)
-  PluginInstance<Localization> retiring_;      // swapped out; destroyed once the loop let go
+  PluginInstance<Localization> localization_;  // the instance the loop uses
+  // Handed to the loop in a swap and not retired or taken yet; `incoming_slot_` is its
+  // configuration, which becomes config_.localization once the loop has taken it.
+  PluginInstance<Localization> incoming_;
+  PluginConfig incoming_slot_;
   std::unique_ptr<rt::ControlLoop> loop_;
   std::unique_ptr<dds::DdsBridge> bridge_;
   std::unique_ptr<CalibrationRunner> calibration_;  // null without `calibration:`
@@ -151,6 +186,13 @@ class Daemon {
   double start_s_ = 0.0;
   double status_period_s_ = 1.0;
   std::atomic<bool> reload_requested_{false};
+  std::atomic<bool> stopping_{false};  // stop() began: no more commands or requests
+  bool hardware_active_ = false;       // activate() succeeded, deactivate() not yet called
+  std::uint64_t loop_request_id_ = 0;  // main thread: ids of requests to the loop
+
+  // Requests from the subscriber thread, answered by the main thread.
+  std::mutex requests_mutex_;
+  std::deque<PendingRequest> pending_requests_;
 
   // Reload outcome for Diagnostics (publisher thread reads, main thread writes).
   mutable std::mutex reload_mutex_;

@@ -34,6 +34,14 @@ struct CommandConfig {
   std::vector<ScriptStep> script;  ///< played in a loop when source is kScript
 };
 
+/// `controlled_stop:`: how fast the daemon brings the robot to rest on its own (a fault, a
+/// command timeout, SIGTERM/SIGINT) on the axes whose robot model has no acceleration limit
+/// in `limits:`; where the model has one, the stop uses the model's.
+struct ControlledStopConfig {
+  double linear_deceleration_mps2 = 1.0;     ///< body x and y, each on its own
+  double angular_deceleration_radps2 = 2.0;  ///< yaw
+};
+
 struct DaemonConfig {
   std::string file;        ///< the configuration file as given
   std::string config_dir;  ///< its directory: base of relative paths
@@ -53,6 +61,7 @@ struct DaemonConfig {
   PluginConfig calibration;
 
   CommandConfig command;
+  ControlledStopConfig controlled_stop;
   std::vector<std::string> plugin_path;  ///< searched before the default search path
   std::string log_level = "info";        ///< spdlog level name
   double status_period_s = 1.0;          ///< status line period on stdout
