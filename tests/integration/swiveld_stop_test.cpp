@@ -1,0 +1,155 @@
+// How far the simulated robot travels after SIGTERM. swiveld runs the docent robot at 1 kHz
+// and is driven at 0.5 m/s over DDS; a swivelctl stream records the state (cycle stamps and
+// the simulator's true pose). The test sends SIGTERM at a CLOCK_MONOTONIC instant, takes the
+// true position at that instant from the last state before it (the robot moves at a steady
+// speed there), and compares it with where the robot came to rest: at most v^2 / (2 a_max)
+// plus one cycle's travel. The state keeps coming until the robot is at rest (DDS goes
+// last), and the daemon logs that it deactivated the hardware after the robot stopped.
+
+#include <gtest/gtest.h>
+#include <time.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "process_util.hpp"
+
+namespace swivel::test {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kSpeedMps = 0.5;
+constexpr double kRateHz = 1000.0;
+
+double monotonic_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+struct StopRun {
+  double distance_m = 0.0;  ///< travelled after SIGTERM
+  double speed_mps = 0.0;   ///< measured just before it
+  int exit_code = -1;
+  std::string log;
+};
+
+// The docent model under `robot`, with `limits` (a YAML mapping or "") added.
+StopRun stop_after_sigterm(const std::string& robot, int domain, const std::string& limits,
+                           const std::string& controlled_stop) {
+  const std::string dir = make_test_dir("stop_" + robot);
+  std::string model = read_text(source_dir() + "/config/robots/docent.yaml");
+  model.replace(model.find("name: docent"), std::string("name: docent").size(), "name: " + robot);
+  if (!limits.empty()) model += "limits: " + limits + "\n";
+  std::ofstream(dir + "/robot.yaml") << model;
+  std::ofstream(dir + "/swiveld.yaml")
+      << "loop: {rate_hz: " << kRateHz << ", realtime: false}\n"
+      << "robot_model: robot.yaml\n"
+      << "hardware: {plugin: sim, params: {seed: 3}}\n"
+      << "drivetrain: {plugin: differential}\n"
+      << "localization: {plugin: raw_eg}\n"
+      << "command: {timeout_s: 0.5, source: none}\n"
+      << "controlled_stop: " << controlled_stop << "\n"
+      << "dds:\n  domain_id: " << domain << "\n  config: " << source_dir()
+      << "/config/dds/loopback.xml\n";
+  const std::vector<std::string> ctl_tail = {"--robot", robot, "--domain", std::to_string(domain),
+                                             "--timeout", "10"};
+  auto ctl = [&](std::vector<std::string> args) {
+    args.insert(args.end(), ctl_tail.begin(), ctl_tail.end());
+    return args;
+  };
+
+  StopRun run;
+  Child daemon(swiveld_exe(), {"--config", dir + "/swiveld.yaml"});
+  Child stream(swivelctl_exe(), ctl({"echo", "state", "--json"}));
+  Child drive(swivelctl_exe(), ctl({"drive", std::to_string(kSpeedMps), "0", "0"}));
+  // At speed for a while: the stop then starts from a steady 0.5 m/s.
+  const auto deadline = Clock::now() + Seconds(20);
+  bool steady = false;
+  while (!steady && Clock::now() < deadline && daemon.alive()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto lines = lines_of(stream.out());
+    int at_speed = 0;
+    for (auto it = lines.rbegin(); it != lines.rend() && at_speed < 50; ++it) {
+      const json s = json::parse(*it, nullptr, false);
+      if (s.is_discarded() || std::abs(s["command"]["vx_mps"].get<double>() - kSpeedMps) > 1e-9) {
+        break;
+      }
+      ++at_speed;
+    }
+    steady = at_speed >= 50;  // half a second of samples
+  }
+  if (!steady) {
+    ADD_FAILURE() << "the robot never drove at " << kSpeedMps << " m/s\n" << daemon.err();
+    return run;
+  }
+
+  const double sigterm_s = monotonic_s();
+  daemon.signal(SIGTERM);
+  run.exit_code = daemon.exit_code(Seconds(20));
+  drive.signal(SIGKILL);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  stream.signal(SIGINT);
+  stream.wait_for(Seconds(5));
+  run.log = daemon.err();
+
+  std::vector<json> states;
+  for (const auto& line : lines_of(stream.out())) {
+    json s = json::parse(line, nullptr, false);
+    if (!s.is_discarded() && s.contains("truth")) states.push_back(std::move(s));
+  }
+  std::size_t last_before = 0;
+  while (last_before + 1 < states.size() && states[last_before + 1]["stamp_s"] <= sigterm_s) {
+    ++last_before;
+  }
+  if (states.size() < 50 || last_before < 20 || last_before + 1 >= states.size()) {
+    ADD_FAILURE() << "too few states around SIGTERM (" << states.size() << ")";
+    return run;
+  }
+  const auto x = [](const json& s) { return s["truth"]["x_m"].get<double>(); };
+  const auto t = [](const json& s) { return s["stamp_s"].get<double>(); };
+  const json& before = states[last_before];
+  const json& earlier = states[last_before - 20];
+  run.speed_mps = (x(before) - x(earlier)) / (t(before) - t(earlier));
+  const double at_sigterm_m = x(before) + run.speed_mps * (sigterm_s - t(before));
+  run.distance_m = x(states.back()) - at_sigterm_m;
+  // The stream went on until the robot was at rest.
+  EXPECT_EQ(states.back()["command"]["vx_mps"].get<double>(), 0.0);
+  EXPECT_LT(std::abs(states.back()["twist"]["vx_mps"].get<double>()), 0.005);
+  std::filesystem::remove_all(dir);
+  return run;
+}
+
+void expect_stop_within(const StopRun& run, double a_max_mps2) {
+  EXPECT_EQ(run.exit_code, 0) << run.log;
+  EXPECT_NEAR(run.speed_mps, kSpeedMps, 0.005);
+  const double bound_m = kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) + kSpeedMps / kRateHz;
+  EXPECT_LE(run.distance_m, bound_m) << run.log;
+  // And not a stop harder than the limit allows (a margin for the sampling).
+  EXPECT_GE(run.distance_m, kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) - 0.002);
+  std::printf("travelled %.5f m after SIGTERM from %.4f m/s at %.1f m/s^2 (bound %.5f m)\n",
+              run.distance_m, run.speed_mps, a_max_mps2, bound_m);
+  // Stop first: the robot at rest, then the drives off, then everything else.
+  const auto rest = run.log.find("robot at rest after");
+  const auto deactivated = run.log.find("hardware sim deactivated");
+  ASSERT_NE(rest, std::string::npos) << run.log;
+  ASSERT_NE(deactivated, std::string::npos) << run.log;
+  EXPECT_LT(rest, deactivated);
+  EXPECT_NE(run.log.find("stopped cleanly"), std::string::npos) << run.log;
+}
+
+TEST(SwiveldStop, SigtermStopsWithinTheRobotModelsDeceleration) {
+  const StopRun run = stop_after_sigterm("it_stop_model", 71, "{linear_acceleration_mps2: 1.0}",
+                                         "{linear_deceleration_mps2: 3.0}");
+  expect_stop_within(run, 1.0);
+}
+
+TEST(SwiveldStop, WithoutModelLimitsSigtermStopsAtTheConfiguredDeceleration) {
+  const StopRun run = stop_after_sigterm("it_stop_default", 72, "",
+                                         "{linear_deceleration_mps2: 2.0}");
+  expect_stop_within(run, 2.0);
+}
+
+}  // namespace
+}  // namespace swivel::test
