@@ -136,6 +136,58 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
                             1 + 200);
 }
 
+// The recovery paths on the real plugins with motion limits on: a stall and its controlled
+// stop, a clear refused and one accepted, a pose set, a swap rolled back by a refusing
+// plugin, and the controlled stop before shutdown.
+TEST(FaultAllocations, RecoveryWithMotionLimitsAllocatesNothingOnTheLoopThread) {
+  RigOptions options;
+  options.limits.linear_acceleration_mps2 = 1.0;
+  options.limits.linear_jerk_mps3 = 10.0;
+  options.limits.angular_acceleration_radps2 = 2.0;
+  FaultRig rig(options);
+  auto refusing = rig.make_localization("refuses_hand_over", "{}");
+  HeapCounts counts;
+  rt::LoopReply refused, cleared, posed;
+  std::thread loop_thread([&] {
+    rig.drive(0.5, 0.0, 0.2, 500);  // warm-up
+    AllocCounter counter;
+    rig.drive(0.5, 0.0, 0.2, 1000);
+    (void)rig.inject("stall", 0.3);
+    rig.drive(0.5, 0.0, 0.2, 100);
+    rig.loop->request_clear(1);
+    rig.drive(0.5, 0.0, 0.2, 1);
+    (void)rig.loop->take_reply(refused);
+    rig.drive(0.5, 0.0, 0.2, 600);
+    rig.loop->request_clear(2);
+    rig.drive(0.5, 0.0, 0.2, 1);
+    (void)rig.loop->take_reply(cleared);
+    PoseEstimate pose;
+    pose.pose = {1.0, 2.0, 0.5};
+    rig.loop->request_set_pose(pose, 3);
+    rig.drive(0.5, 0.0, 0.2, 1);
+    (void)rig.loop->take_reply(posed);
+    (void)rig.loop->request_localization_swap(refusing.get(), "refuses_hand_over");
+    rig.drive(0.5, 0.0, 0.2, 500);
+    (void)rig.loop->take_retired_localization();
+    rig.loop->request_controlled_stop(rig.t_s);
+    rig.drive(0.5, 0.0, 0.2, 1000);
+    counts = counter.counts();
+  });
+  loop_thread.join();
+  EXPECT_EQ(counts.allocations, 0U) << "first allocation: " << counts.first_allocation_bytes
+                                    << " bytes";
+  EXPECT_EQ(counts.deallocations, 0U);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_EQ(refused.fault, FaultCode::kHardwareError);
+  EXPECT_TRUE(cleared.ok);
+  EXPECT_TRUE(posed.ok);
+  const StateSnapshot last = rig.state();
+  EXPECT_TRUE(last.stopping);
+  EXPECT_EQ(last.command_twist.vx_mps, 0.0);
+  EXPECT_EQ(last.fault_count, 1U);
+  EXPECT_STREQ(last.localization_plugin.data(), "raw_eg");
+}
+
 TEST(FaultAllocations, ThrowingPluginAllocatesTheException) {
   if (!test::malloc_is_counted()) GTEST_SKIP() << "malloc is not counted in sanitizer builds";
   RigOptions options;

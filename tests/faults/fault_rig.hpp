@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -53,6 +54,9 @@ struct RigOptions {
   std::map<std::string, EffectParams> world_effects;
   double command_timeout_s = 0.5;
   rt::OdometryCheckOptions odometry_check;  ///< the loop's defaults unless a test says
+  MotionLimits limits;  ///< the loop's motion limits (none unless a test says)
+  /// The controlled stop's deceleration where `limits` has none (infinite: zero at once).
+  double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
 };
 
 inline PluginContext plugin_context(const std::string& params_yaml, const std::string& path,
@@ -87,6 +91,8 @@ class FaultRig {
     loop_options.rate_hz = 1.0 / kDtS;
     loop_options.command_timeout_s = options.command_timeout_s;
     loop_options.odometry_check = options.odometry_check;
+    loop_options.limits = options.limits;
+    loop_options.stop_linear_deceleration_mps2 = options.stop_linear_deceleration_mps2;
     loop = std::make_unique<rt::ControlLoop>(loop_options, *hardware, *drivetrain, *localization,
                                              options.localization.c_str());
     void* library = dlopen(hardware.path().c_str(), RTLD_NOW | RTLD_NOLOAD);

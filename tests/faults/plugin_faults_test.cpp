@@ -75,6 +75,42 @@ TEST(PluginFaults, LocalizationThrowingIsCaughtAtTheLoopBoundary) {
                                "plugin threw an exception on the real-time loop");
 }
 
+// A swap to a plugin whose hand_over() refuses (kError) or throws: the loop keeps the
+// running instance, hands the refused one back with the reason, and raises no fault.
+void run_refused_hand_over_row(const std::string& params, const std::string& reason) {
+  FaultRig rig;
+  rig.drive(kVxMps, 0.0, 0.0, 300);
+  const StateSnapshot before = rig.state();
+  auto refusing = rig.make_localization("refuses_hand_over", params);
+  ASSERT_TRUE(rig.loop->request_localization_swap(refusing.get(), "refuses_hand_over"));
+  rig.drive(kVxMps, 0.0, 0.0, 1);
+  rt::SwapOutcome outcome;
+  EXPECT_EQ(rig.loop->take_retired_localization(&outcome), refusing.get());
+  EXPECT_FALSE(outcome.taken);
+  EXPECT_STREQ(outcome.refusal.data(), reason.c_str());
+  refusing.reset();  // off the loop, as the daemon does
+  EXPECT_EQ(rig.loop->active_localization(), rig.localization.get());
+  EXPECT_NE(rig.log().find("localization swap refused by the incoming plugin's hand-over (" +
+                           reason + "); the active one stays"),
+            std::string::npos)
+      << rig.log();
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  const StateSnapshot after = rig.state();
+  EXPECT_EQ(after.mode, LoopMode::kVelocity);
+  EXPECT_EQ(after.fault_count, 0U);
+  EXPECT_STREQ(after.localization_plugin.data(), "raw_eg");
+  EXPECT_EQ(after.localization_swaps, before.localization_swaps);
+  EXPECT_GT(after.estimate.pose.x_m, before.estimate.pose.x_m + kVxMps * 0.09);
+}
+
+TEST(PluginFaults, HandOverRefusedAtSwapTimeRollsBackWithoutAFault) {
+  run_refused_hand_over_row("{}", "no map to place the pose in (planted refusal)");
+}
+
+TEST(PluginFaults, HandOverThrowingAtSwapTimeRollsBackWithoutAFault) {
+  run_refused_hand_over_row("{throw: true}", "plugin threw an exception on the real-time loop");
+}
+
 // A swap prepared while the loop runs: the loader refuses, the loop never sees it.
 void expect_loop_unaffected(FaultRig& rig, const StateSnapshot& before) {
   rig.drive(kVxMps, 0.0, 0.0, 100);
