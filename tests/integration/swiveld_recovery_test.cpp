@@ -82,12 +82,14 @@ class Daemon {
 };
 
 // A stall of the simulated hardware from 1 s to 6 s of sim time: a clear during it is
-// refused with the cause, one after it is accepted, and the robot drives again.
+// refused with the cause, one after it is accepted, and the robot drives again. A clear
+// while no command comes is refused as well.
 TEST(SwiveldRecovery, ClearIsRefusedWhileTheHardwareStallsAndAcceptedAfterwards) {
   Daemon daemon("it_clear", 73,
                 "{plugin: sim, params: {faults: [{kind: stall, start_s: 1.0, duration_s: 5.0}]}}",
                 "{plugin: raw_eg}");
-  const json stalled = daemon.wait_for([](const json& s) { return s["fault"] == "hardware_error"; });
+  const json stalled =
+      daemon.wait_for([](const json& s) { return s["fault"] == "hardware_error"; });
   EXPECT_EQ(stalled["mode"], "safe_stop");
 
   const ToolRun refused = daemon.ctl({"clear"});
@@ -111,9 +113,13 @@ TEST(SwiveldRecovery, ClearIsRefusedWhileTheHardwareStallsAndAcceptedAfterwards)
   const ToolRun drive = daemon.ctl({"drive", "0.2", "0", "0", "--for", "1"});
   EXPECT_EQ(drive.exit_code, 0) << drive.err;
   EXPECT_GT(daemon.state()["truth"]["x_m"].get<double>(), 0.05);
-  const ToolRun nothing = daemon.ctl({"clear"});
-  EXPECT_EQ(nothing.exit_code, 0);
-  EXPECT_EQ(nothing.out, daemon.robot() + ": clear: nothing to clear\n");
+  // The drive is over and its command stream with it: a timeout, which a clear cannot end.
+  daemon.wait_for([](const json& s) { return s["fault"] == "command_timeout"; });
+  const ToolRun absent = daemon.ctl({"clear"});
+  EXPECT_EQ(absent.exit_code, 1);
+  EXPECT_EQ(absent.out, daemon.robot() +
+                            ": clear: refused: command_timeout persists (velocity command timed "
+                            "out): no fresh velocity command; the next one resumes by itself\n");
   EXPECT_TRUE(daemon.process().alive());
 }
 
