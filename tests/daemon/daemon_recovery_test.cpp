@@ -73,7 +73,8 @@ class LifecycleProbe {
   LifecycleProbe() {
     handle_ = dlopen((kTestPlugins + "/swivel_hardware_lifecycle.so").c_str(), RTLD_NOW);
     if (handle_ == nullptr) return;
-    journal_ = reinterpret_cast<int (*)(char*, unsigned)>(dlsym(handle_, "swivel_lifecycle_journal"));
+    journal_ =
+        reinterpret_cast<int (*)(char*, unsigned)>(dlsym(handle_, "swivel_lifecycle_journal"));
     set_ = reinterpret_cast<int (*)(const char*, int)>(dlsym(handle_, "swivel_lifecycle_set"));
   }
   ~LifecycleProbe() {

@@ -294,7 +294,8 @@ TEST(DdsBridge, DeliversSetPoseAndPublishesItsReply) {
   Client client;
   const dds_entity_t writer = client.writer(&swivel_msg_SetPose_desc, kSetPoseTopic);
   const dds_entity_t replies = client.reader<swivel_msg_Reply>(&swivel_msg_Reply_desc, kReplyTopic);
-  ASSERT_TRUE(wait_for([&] { return publication_matched(writer) && subscription_matched(replies); }));
+  ASSERT_TRUE(
+      wait_for([&] { return publication_matched(writer) && subscription_matched(replies); }));
 
   std::string own = robot;
   swivel_msg_SetPose p{};

@@ -80,7 +80,6 @@ MotionLimits acceleration_limit(double mps2) {
   return limits;
 }
 
-// --- Motion limits --------------------------------------------------------------------
 
 TEST(LoopLimits, CommandsAccelerateAtTheModelsLimit) {
   Rig rig(options_with(acceleration_limit(0.5)));
@@ -156,7 +155,6 @@ TEST(LoopLimits, TheLimiterFollowsTheDrivetrainsOwnLimits) {
   EXPECT_EQ(rig.vx(), 0.0);
 }
 
-// --- Controlled stop before shutdown ----------------------------------------------------
 
 TEST(ControlledStop, IgnoresCommandsAndBringsTheRobotToRest) {
   Rig rig(options_with(acceleration_limit(1.0)));
@@ -182,7 +180,6 @@ TEST(ControlledStop, IgnoresCommandsAndBringsTheRobotToRest) {
   EXPECT_EQ(rig.hardware.last_left_radps.load(), 0.0);
 }
 
-// --- One-shot clear ------------------------------------------------------------------------
 
 TEST(ClearRequest, IsRefusedWhileTheCausePersistsAndDoesNotWait) {
   Rig rig;
@@ -233,7 +230,6 @@ TEST(ClearRequest, NothingToClearIsAnswered) {
   EXPECT_EQ(reply.fault, FaultCode::kNone);
 }
 
-// --- Set pose -------------------------------------------------------------------------------
 
 TEST(SetPoseRequest, GoesThroughTheActiveLocalizationsHandOver) {
   Rig rig;
@@ -272,7 +268,6 @@ TEST(SetPoseRequest, ARefusalLeavesTheEstimateAndRaisesNoFault) {
   EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
 }
 
-// --- The hardware's error hook and pause ------------------------------------------------------
 
 TEST(HardwareError, OnErrorIsCalledOnceUntilAClear) {
   Rig rig;
@@ -322,7 +317,6 @@ TEST(HardwarePause, IsGrantedOnlyToAStoppedRobotAndStopsTheHardwareCalls) {
   loop.stop();
 }
 
-// --- Swap rollback ------------------------------------------------------------------------------
 
 TEST(SwapRollback, ARefusedHandOverKeepsTheOutgoingInstance) {
   Rig rig;
@@ -354,7 +348,6 @@ TEST(SwapRollback, ARefusedHandOverKeepsTheOutgoingInstance) {
   EXPECT_EQ(rig.loop->active_localization(), &working);
 }
 
-// --- All of it without a heap operation -----------------------------------------------------------
 
 TEST(LoopRecoveryAllocations, LimitsStopsClearsPosesAndRollbacksAllocateNothing) {
   MotionLimits limits = acceleration_limit(1.0);

@@ -611,7 +611,8 @@ void Daemon::bring_to_rest() noexcept {
       const Twist2& c = s.command_twist;
       const Twist2& m = s.odometry_twist;
       const bool commanded_zero = c.vx_mps == 0.0 && c.vy_mps == 0.0 && c.wz_radps == 0.0;
-      const bool measured_still = std::hypot(m.vx_mps, m.vy_mps) < 0.005 && std::abs(m.wz_radps) < 0.01;
+      const bool measured_still =
+          std::hypot(m.vx_mps, m.vy_mps) < 0.005 && std::abs(m.wz_radps) < 0.01;
       if (s.stopping && commanded_zero && measured_still) {
         if (s.has_truth && from.has_truth) {
           spdlog::info("robot at rest after {:.3f} s; it travelled {:.4f} m meanwhile "

@@ -422,8 +422,9 @@ void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) n
             LogCode::kMessage, now_s,
             outcome == CalibrationOutcome::kFinished    ? "calibration finished"
             : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
-            : outcome == CalibrationOutcome::kRefused   ? "calibration refused: fault latched or stopping"
-                                                        : "calibration stopped by a fault");
+            : outcome == CalibrationOutcome::kRefused
+                ? "calibration refused: fault latched or stopping"
+                : "calibration stopped by a fault");
 }
 
 // One cycle of an active calibration. Returns true while it drives the actuators this cycle
@@ -717,8 +718,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   const bool calibrating = step_calibration(now_s, final_stop || stopping_);
   if (calibrating) has_command_ = false;  // velocity commands are ignored meanwhile
   Twist2 target;
-  const bool moving =
-      !calibrating && !final_stop && !stopping_ && latched_fault_ == FaultCode::kNone && has_command_;
+  const bool moving = !calibrating && !final_stop && !stopping_ &&
+                      latched_fault_ == FaultCode::kNone && has_command_;
   if (moving) target = command_.twist;
   Twist2 applied;
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
@@ -730,8 +731,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   } else if (basis != nullptr && !calibrating) {
     // The final cycle stops at once: the daemon brings the robot to rest before it.
     const Twist2 limited = final_stop ? Twist2{} : limit(target, !moving, now_s);
-    if (guarded([&] { return drivetrain_.inverse(limited, *basis, period_s_, setpoints_, applied); },
-                thrown) != Status::kOk) {
+    if (guarded(
+            [&] { return drivetrain_.inverse(limited, *basis, period_s_, setpoints_, applied); },
+            thrown) != Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
                   thrown != nullptr ? thrown : drivetrain_.last_error());
       zeroed = true;

@@ -15,7 +15,8 @@
 //    instance is destroyed from here (or from unconfigured).
 //  - active: activate() succeeded (drives enabled after the plugin's own checks). The loop
 //    calls read() and write() once per cycle; nothing else is called meanwhile.
-//  - error: a read() or write() returned kError (or threw). The loop calls on_error() once,
+//  - error: a read() or write() returned kError (or threw), or a reading had more modules
+//    than the loop can take (every hardware_error fault). The loop calls on_error() once,
 //    on the loop thread, right after that cycle's write; it then stops the robot (zero
 //    setpoints) and keeps calling read() and write() so that it sees the hardware answer
 //    again. A clear requested by the operator pauses the loop's hardware calls at a cycle

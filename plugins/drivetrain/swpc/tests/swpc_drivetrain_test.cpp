@@ -578,7 +578,8 @@ TEST(SwpcDrivetrain, TheModelsSteeringRateLimitBoundsEverySteeringSetpoint) {
   Twist2 applied;
   ASSERT_EQ(drivetrain.inverse(Twist2{0.0, 0.5, 0.0}, state, kDt, cmd, applied), Status::kOk);
   double fastest = 0.0;
-  for (std::size_t i = 0; i < 4; ++i) fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
+  for (std::size_t i = 0; i < 4; ++i)
+    fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
   EXPECT_NEAR(fastest, 2.0, 1e-12);  // the most loaded steering motor at the model's limit
   EXPECT_GT(applied.vy_mps, 0.0);
   EXPECT_LT(applied.vy_mps, 0.5);
@@ -597,7 +598,8 @@ TEST(SwpcDrivetrain, TheModelsSteeringRateLimitBoundsEverySteeringSetpoint) {
   unlimited.configure(ctx);
   ASSERT_EQ(unlimited.inverse(Twist2{0.0, 0.5, 0.0}, state, kDt, cmd, applied), Status::kOk);
   fastest = 0.0;
-  for (std::size_t i = 0; i < 4; ++i) fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
+  for (std::size_t i = 0; i < 4; ++i)
+    fastest = std::max(fastest, std::abs(cmd.steer_rate_radps[i]));
   EXPECT_GT(fastest, 2.0);
 }
 
