@@ -420,7 +420,8 @@ dds::ReplySample Daemon::clear_fault(std::uint64_t request_id) {
   if (loop_->latest().hardware_in_error) {
     // The hardware left its active state: activate it again off the loop, with the loop's
     // calls to it paused at a cycle boundary (granted once the robot stands still).
-    constexpr double kPauseTimeoutS = 5.0;
+    // Short: the main thread also keeps systemd's watchdog (2 s) fed.
+    constexpr double kPauseTimeoutS = 1.0;
     if (!loop_->pause_hardware(kPauseTimeoutS)) {
       reply.text =
           "refused: hardware_error: the hardware could not be paused for re-activation "
