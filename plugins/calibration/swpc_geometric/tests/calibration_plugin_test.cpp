@@ -79,21 +79,22 @@ class NullLocalization final : public Localization {
 };
 
 // True parameters: every module off its design values by amounts of the size the paper
-// found (Table 4), wheel radii 2 % larger in common (see calibration_plugin.hpp: on
-// velocity-controlled wheels only a common radius error is observable).
+// found (Table 4), each wheel radius by its own amount (the torque-driven free wheels roll
+// as the rotation asks, so each radius is observable).
 RobotModel true_model(const RobotModel& nominal) {
   RobotModel truth = nominal;
   const double dx_mm[] = {1.5, -1.0, 0.8, -1.2};
   const double dy_mm[] = {-0.9, 1.3, -1.1, 0.7};
   const double delta_deg[] = {2.0, -3.0, 1.5, -2.5};
   const double d_mm[] = {20.8, 19.4, 21.0, 19.7};
+  const double r_mm[] = {56.1, 54.4, 55.6, 54.8};
   for (std::size_t i = 0; i < truth.modules.size(); ++i) {
     SwpcModuleParams& m = truth.modules[i];
     m.x_m += dx_mm[i] * 1e-3;
     m.y_m += dy_mm[i] * 1e-3;
     m.steering_offset_rad = delta_deg[i] * kDegToRad;
     m.caster_offset_m = d_mm[i] * 1e-3;
-    m.wheel_radius_m = 0.0561;
+    m.wheel_radius_m = r_mm[i] * 1e-3;
   }
   return truth;
 }
@@ -252,10 +253,9 @@ TEST(SwpcGeometricPlugin, RecoversTrueParametersOfTheSimulatedRobot) {
   // Motion capture noise 0.3 mm / 1 mrad at 100 Hz over 90 degree runs: the reported
   // 1-sigma is about 0.04 mm for x, y, d and 0.1-0.12 degrees for delta; the tolerances are
   // about 5 sigma and well below the perturbations (0.7-1.5 mm, 1.5-3 degrees, 0.3-1 mm).
-  // Radii: the free wheels are velocity-controlled and commanded with the nominal lever
-  // arms, so each module's radius carries up to ~1 % slip bias (calibration_plugin.hpp);
-  // the common 2 % error must still be found (mean within 0.15 mm).
-  double mean_r_m = 0.0;
+  // Radii: the free wheels are torque-driven (the default) and roll without slipping, so
+  // each is found to noise level (reported 1-sigma about 0.007 mm; 0.05 mm is 7 sigma and
+  // well below the errors to find, 0.2-1.1 mm).
   for (std::size_t i = 0; i < 4; ++i) {
     const SwpcModuleParams& got = calibrated.modules[i];
     const SwpcModuleParams& want = rig.truth_.modules[i];
@@ -274,12 +274,10 @@ TEST(SwpcGeometricPlugin, RecoversTrueParametersOfTheSimulatedRobot) {
     EXPECT_NEAR(got.y_m, want.y_m, 0.25e-3);
     EXPECT_NEAR(got.steering_offset_rad, want.steering_offset_rad, 0.5 * kDegToRad);
     EXPECT_NEAR(got.caster_offset_m, want.caster_offset_m, 0.25e-3);
-    EXPECT_NEAR(got.wheel_radius_m, want.wheel_radius_m, 0.6e-3);
-    mean_r_m += got.wheel_radius_m / 4.0;
+    EXPECT_NEAR(got.wheel_radius_m, want.wheel_radius_m, 0.05e-3);
     EXPECT_GT(result.modules[i].sigma_x_m, 0.0);
     EXPECT_NEAR(result.modules[i].x_m, got.x_m, 1e-9);
   }
-  EXPECT_NEAR(mean_r_m, 0.0561, 0.15e-3);
 }
 
 TEST(SwpcGeometricPlugin, CancelMidRunStopsWithinOneCycle) {
@@ -349,6 +347,26 @@ TEST(SwpcGeometricPlugin, RefusesAConfigurationThatNamesAnUnknownKey) {
     FAIL() << "configure accepted an unknown key";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("rotation_degrees"), std::string::npos) << e.what();
+  }
+}
+
+// A plan the procedure cannot carry out names the parameter to change.
+TEST(SwpcGeometricPlugin, RefusesAPlanAWheelCannotFollowNamingTheParameter) {
+  CalibrationRig rig;
+  PluginInstance<Calibration> c = rig.loader_.create<Calibration>("swpc_geometric");
+  PluginContext ctx;
+  ctx.robot = &rig.nominal_;
+  ctx.period_s = kPeriodS;
+  ctx.config_file = "swiveld.yaml";
+  ctx.params_path = "calibration.params";
+  ctx.params = YAML::Load("{yaw_rate_radps: 2.0, max_wheel_rate_radps: 5.0}");
+  try {
+    c->configure(ctx);
+    FAIL() << "configure accepted wheel rates above max_wheel_rate_radps";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("calibration.params.yaw_rate_radps"), std::string::npos) << what;
+    EXPECT_NE(what.find("above max_wheel_rate_radps"), std::string::npos) << what;
   }
 }
 
