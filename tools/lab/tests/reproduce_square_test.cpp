@@ -54,7 +54,6 @@ TEST(LabReproduceSquareTest, CalibratedModelFileIsTheOneTracked) {
   ASSERT_TRUE(in.good());
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_EQ(j.at("calibrated_model").get<std::string>(), model);
-  EXPECT_EQ(j.at("calibration_passes").get<int>(), 0);
   const auto& m = j.at("measured");
   EXPECT_LT(m.at("position_mae_m").at("calibrated").get<double>(),
             0.5 * m.at("position_mae_m").at("nominal").get<double>());

@@ -1,4 +1,4 @@
-// The calibration procedure run end to end on the simulated world.
+// The daemon's calibration procedure run offline on the simulated world, end to end.
 
 #include "swivel/calibration/simulated_procedure.hpp"
 
@@ -6,20 +6,15 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
-#include "swivel/calibration/calibration_io.hpp"
 #include "swivel/calibration/monte_carlo.hpp"
 
 namespace swivel::calibration {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-// The simulated wheels are velocity-controlled: with the paper's rectangular layout one
-// pattern of radius errors (+, -, +, - around the robot) makes the free wheels slip in a
-// way that every r estimate still agrees with (for a locked corner the diagonal wheel's
-// lever arm squared equals the sum of the adjacent ones'), so the search for consistent
-// rates cannot remove it. It leaves about 0.12 mm for Table 4's radii; 0.6 mm without it.
-constexpr double kUnobservableRadiusM = 0.2e-3;
 
 RobotModel design_robot() {
   RobotModel m;
@@ -57,26 +52,70 @@ Errors worst_errors(const CalibrationResult& result, const RobotModel& truth) {
   return e;
 }
 
-TEST(SimulatedProcedureTest, NoiseFreeSensorsRecoverTheTrueParameters) {
-  RobotModel truth = table4_robot();
-  // Fine encoders: what is left is the simulator's integration, not the sensors.
+// Noise-free sensors with encoders fine enough not to matter.
+RobotModel ideal_sensors(RobotModel truth) {
   truth.sensors.wheel_encoder_counts_per_rev = 1 << 24;
   truth.sensors.steering_encoder_counts_per_rev = 1 << 24;
+  return truth;
+}
+
+TEST(SimulatedProcedureTest, RecordsTwoFullRunsPerModuleAsTheDaemonDoes) {
+  const SimulatedProcedureOptions options;  // the daemon's defaults
+  const SimulatedCalibration sc = run_simulated_calibration(design_robot(), table4_robot(), options);
+
+  ASSERT_TRUE(sc.result.ok()) << sc.result.verdict.text();
+  ASSERT_EQ(sc.input.runs.size(), 8U);
+  for (std::size_t j = 0; j < sc.input.runs.size(); ++j) {
+    const LockedRun& run = sc.input.runs[j];
+    SCOPED_TRACE("run " + std::to_string(j));
+    EXPECT_EQ(run.locked_module, j / 2);
+    // Counter-clockwise by at least the procedure's 300 degrees, at most one sample more.
+    const double turned = run.data.yaw_rad.back() - run.data.yaw_rad.front();
+    EXPECT_GE(turned, options.procedure.rotation_rad);
+    EXPECT_LT(turned, options.procedure.rotation_rad + 0.01);
+    // Locked where the alignment brought it: the angle asked for, within its tolerance (the
+    // steering encoder counts turns, so compare modulo one).
+    EXPECT_LE(std::abs(wrap_pi(run.locked_steer_meas_rad -
+                               options.procedure.locked_angles_meas_rad[j % 2])),
+              options.procedure.align_tolerance_rad);
+  }
+  // Alignment, settling, 300 degrees at 0.3 rad/s and stopping, eight times.
+  EXPECT_GT(sc.duration_s, 8 * (options.procedure.rotation_rad / 0.3 + 1.5));
+  EXPECT_LT(sc.duration_s, 8 * (options.procedure.rotation_rad / 0.3 + 5.0));
+}
+
+TEST(SimulatedProcedureTest, NoiseFreeSensorsRecoverTheTrueParameters) {
+  const RobotModel truth = ideal_sensors(table4_robot());
   SimulatedProcedureOptions options;
   options.sim.sensor_noise = false;
 
   const SimulatedCalibration sc = run_simulated_calibration(design_robot(), truth, options);
 
   ASSERT_TRUE(sc.result.ok()) << sc.result.verdict.text();
-  ASSERT_EQ(sc.logs.size(), 8U);
   const Errors e = worst_errors(sc.result, truth);
+  // What is left is the simulator's 1 ms integration of the rotation.
   EXPECT_LT(e.position_m, 1e-6);
   EXPECT_LT(e.delta_rad, 1e-5);
   EXPECT_LT(e.d_m, 1e-6);
-  EXPECT_LT(e.r_m, kUnobservableRadiusM);
-  // The search for consistent wheel rates must beat the single pass clearly.
-  const Errors first = worst_errors(sc.pass_results.front(), truth);
-  EXPECT_LT(e.r_m, 0.3 * first.r_m);
+  // Torque-driven wheels roll as the rotation asks: every radius is observable in one pass.
+  EXPECT_LT(e.r_m, 1e-6);
+}
+
+TEST(SimulatedProcedureTest, VelocityDrivenWheelsSlipAndBiasTheRadii) {
+  // The same procedure with the free wheels tracking rates from the design values: their
+  // wrong ratios make the wheels slip against one another, which torque drive avoids.
+  const RobotModel truth = ideal_sensors(table4_robot());
+  SimulatedProcedureOptions options;
+  options.sim.sensor_noise = false;
+  options.procedure.wheel_drive = WheelDrive::kVelocity;
+
+  const SimulatedCalibration sc = run_simulated_calibration(design_robot(), truth, options);
+
+  ASSERT_TRUE(sc.result.ok()) << sc.result.verdict.text();
+  const Errors e = worst_errors(sc.result, truth);
+  EXPECT_GT(e.r_m, 0.1e-3);  // Table 4's radii differ by up to 1.6 mm; slip takes a share
+  EXPECT_LT(e.r_m, 1.0e-3);
+  EXPECT_LT(e.position_m, 1e-6);  // the pivots do not depend on the wheels
 }
 
 TEST(SimulatedProcedureTest, QuantizedEncodersLimitTheAccuracyToTheirResolution) {
@@ -94,7 +133,7 @@ TEST(SimulatedProcedureTest, QuantizedEncodersLimitTheAccuracyToTheirResolution)
   EXPECT_LT(e.delta_rad, 2.0 * half_count_rad);
   EXPECT_LT(e.position_m, 0.020 * 2.0 * half_count_rad + 1e-6);
   EXPECT_LT(e.d_m, 0.020 * 2.0 * half_count_rad + 1e-6);
-  EXPECT_LT(e.r_m, kUnobservableRadiusM);
+  EXPECT_LT(e.r_m, 0.01e-3);
 }
 
 TEST(SimulatedProcedureTest, DefaultNoiseErrorsMostlyWithinReportedUncertainty) {
@@ -115,46 +154,46 @@ TEST(SimulatedProcedureTest, DefaultNoiseErrorsMostlyWithinReportedUncertainty) 
                             mc.params.wheel_radius_m - t.wheel_radius_m};
       const double sigma[] = {mc.sigma.x_m, mc.sigma.y_m, mc.sigma.steering_offset_rad,
                               mc.sigma.caster_offset_m, mc.sigma.wheel_radius_m};
-      ASSERT_GT(sigma[4], 0.0);
-      // r's error is dominated by the slip pattern above, which no sigma accounts for.
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < 5; ++k) {
         ASSERT_GT(sigma[k], 0.0);
         within += std::abs(err[k]) <= 2.0 * sigma[k] ? 1 : 0;
         ++total;
       }
-      // Absolute sanity: sub-millimetre and sub-degree with 0.3 mm / 0.06 deg motion capture.
-      EXPECT_LT(std::hypot(err[0], err[1]), 1e-3);
-      EXPECT_LT(std::abs(err[2]), 1.0 * kDeg);
-      EXPECT_LT(std::abs(err[4]), kUnobservableRadiusM + 0.1e-3);
+      // Absolute sanity with 0.3 mm / 0.06 deg motion capture over 300-degree runs:
+      // hundredths of a millimetre and of a degree.
+      EXPECT_LT(std::hypot(err[0], err[1]), 0.1e-3);
+      EXPECT_LT(std::abs(err[2]), 0.2 * kDeg);
+      EXPECT_LT(std::abs(err[4]), 0.02e-3);
     }
   }
   // A 2-sigma interval holds ~95 % of Gaussian errors; "mostly" leaves room for 100 draws.
   EXPECT_GE(static_cast<double>(within) / total, 0.85) << within << " of " << total;
 }
 
-TEST(SimulatedProcedureTest, LogsCarryTheirLockSoTheyCanBeCalibratedOffline) {
-  const RobotModel truth = table4_robot();
-  SimulatedProcedureOptions options;
-  options.locked_angles_meas_rad = {45.0 * kDeg, 165.0 * kDeg};
-  const std::vector<RunLog> logs = simulate_calibration_runs(design_robot(), truth, options);
-  ASSERT_EQ(logs.size(), 8U);
-  const std::optional<LockSpec> lock = lock_from_comments(logs[3]);
-  ASSERT_TRUE(lock.has_value());
-  EXPECT_EQ(lock->locked_module, 1U);
-  ASSERT_TRUE(lock->declared_steer_rad.has_value());
-  EXPECT_NEAR(*lock->declared_steer_rad, 165.0 * kDeg, 1e-12);
-}
-
 TEST(SimulatedProcedureTest, ImpossibleMotionIsRefusedWithAReason) {
   RobotModel nominal = design_robot();
   nominal.modules[1].x_m = nominal.modules[0].x_m;  // module 2's axis on module 1's pivot
   nominal.modules[1].y_m = nominal.modules[0].y_m - 0.005;
-  SimulatedProcedureOptions options;
   try {
-    simulate_calibration_runs(nominal, table4_robot(), options);
+    run_simulated_calibration(nominal, table4_robot(), SimulatedProcedureOptions{});
     FAIL() << "expected a refusal";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("within its caster offset"), std::string::npos)
+  } catch (const ProcedureConfigError& e) {
+    EXPECT_EQ(e.option(), "locked_angles_meas_rad");
+    EXPECT_NE(std::string(e.what()).find("module 2 is too close to module 1's pivot"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(SimulatedProcedureTest, MissingMotionCaptureStopsTheProcedureWithItsReason) {
+  SimulatedProcedureOptions options;
+  options.sim.motion_capture = false;
+  try {
+    run_simulated_calibration(design_robot(), table4_robot(), options);
+    FAIL() << "expected the procedure to fail";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no motion capture within motion_capture_timeout_s"),
+              std::string::npos)
         << e.what();
   }
 }
