@@ -35,6 +35,7 @@ SquareRunResult run_square(const RobotModel& truth, const RobotModel& controller
   sim::SimOptions sim_options;
   sim_options.seed = options.seed;
   sim_options.sensor_noise = options.sensor_noise;
+  sim_options.substep_s = options.substep_s;
   sim_options.nonsystematic = options.nonsystematic;
   // Casters start trailing the first leg, as they would after a push forward.
   sim_options.initial_steer_rad =
@@ -74,13 +75,16 @@ SquareRunResult run_square(const RobotModel& truth, const RobotModel& controller
         std::span<const double>(wheel_rate.data(), n));
     if (fk.ok) odom = compose(odom, swpc::integrate_twist(fk.twist, dt_s));
     prev = now;
-    if (++step % options.trace_every == 0) out.trace.push_back(world.true_pose());
+    ++step;
+    if (options.trace_every > 0 && step % options.trace_every == 0) {
+      out.trace.push_back(world.true_pose());
+    }
   }
   out.finished = follower.done();
   out.duration_s = world.time_s();
   out.true_end = world.true_pose();
   out.odometry_end = odom;
-  out.trace.push_back(out.true_end);
+  if (options.trace_every > 0) out.trace.push_back(out.true_end);
   out.position_error_m = std::hypot(out.true_end.x_m, out.true_end.y_m);
   out.heading_error_rad = std::abs(std::remainder(out.true_end.yaw_rad, 2.0 * std::numbers::pi));
   return out;

@@ -22,7 +22,10 @@ struct SquareRunOptions {
   /// Random errors outside the kinematic models, the same for every controller model.
   sim::NonSystematicErrors nonsystematic;
   bool sensor_noise = true;
-  /// Keep every n-th true pose for the plot.
+  /// The world's integration step. Coarser steps are quicker but not free: at 5 ms the true
+  /// model's noise-free end error grows from 0.014 m to 0.023 m.
+  double substep_s = 0.001;
+  /// Keep every n-th true pose for the plot; 0 keeps none.
   int trace_every = 10;
 };
 

@@ -1,0 +1,25 @@
+#include "gnuplot.hpp"
+
+#include <cstdlib>
+#include <stdexcept>
+
+namespace swivel::lab {
+
+std::string gnuplot_quote(const std::filesystem::path& path) {
+  std::string out = "'";
+  for (const char c : path.string()) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+void run_gnuplot(const std::filesystem::path& script, const std::string& written) {
+  std::string shell = "'";
+  for (const char c : script.string())
+    shell += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  const std::string cmd = "gnuplot " + shell + "' 2>&1";
+  if (std::system(cmd.c_str()) != 0) {
+    throw std::runtime_error("gnuplot failed on " + script.string() + " (is gnuplot installed?); " +
+                             written + " were written");
+  }
+}
+
+}  // namespace swivel::lab
