@@ -39,6 +39,7 @@ struct SimulateOptions {
   int locked_module = 1;
   double locked_steer_deg = 45.0;
   double yaw_rate_radps = 0.3;
+  std::string wheel_drive = "torque";
   std::string out_file;
 };
 
@@ -103,6 +104,13 @@ int run_simulate(const SimulateOptions& o) {
       !controller.calibration(motion, command, calibration_twist)) {
     throw std::invalid_argument("calibration motion impossible: a free caster's steering axis "
                                 "lies within its caster offset of the locked pivot");
+  }
+  if (kind == TrajectoryKind::kCalibration && o.wheel_drive == "torque") {
+    // As the paper and the daemon's procedure drive them: the wheel-rate setpoints only set
+    // the pace, and each free wheel rolls as the rotation asks.
+    for (ModuleDriveMode& mode : command.mode) {
+      if (mode == ModuleDriveMode::kFreeSteer) mode = ModuleDriveMode::kTorque;
+    }
   }
 
   RunLogHeader header = run_log_header(nominal);
@@ -199,6 +207,11 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--yaw-rate", options->yaw_rate_radps,
                   "calibration: yaw rate about the pivot, rad/s (positive: counter-clockwise)")
+      ->capture_default_str();
+  cmd->add_option("--wheel-drive", options->wheel_drive,
+                  "calibration: the free wheels in torque drive (they roll as the rotation asks) "
+                  "or tracking constant rates from the nominal model (velocity)")
+      ->check(CLI::IsMember({"torque", "velocity"}))
       ->capture_default_str();
   cmd->add_option("--out", options->out_file, "run log to write (CSV)")->required();
   cmd->callback([options, &exit_code]() { exit_code = run_simulate(*options); });
