@@ -91,6 +91,8 @@ MonteCarloResult run_monte_carlo(const MonteCarloOptions& options) {
     if (!cal.ok()) {
       if (res.refused++ == 0) res.first_refusal = cal.reason();
     } else {
+      TrialErrors errors;
+      const auto modules = static_cast<double>(truth.size());
       for (std::size_t m = 0; m < truth.size(); ++m) {
         const SwpcModuleParams& est = cal.modules[m].params;
         const SwpcModuleSigma& sig = cal.modules[m].sigma;
@@ -104,6 +106,10 @@ MonteCarloResult run_monte_carlo(const MonteCarloOptions& options) {
         res.mae_steering_offset_rad += std::abs(ed);
         res.mae_caster_offset_m += std::abs(ec);
         res.mae_wheel_radius_m += std::abs(er);
+        errors.position_m += ep / modules;
+        errors.steering_offset_rad += std::abs(ed) / modules;
+        errors.caster_offset_m += std::abs(ec) / modules;
+        errors.wheel_radius_m += std::abs(er) / modules;
         res.max_position_m = std::max(res.max_position_m, ep);
         res.max_steering_offset_rad = std::max(res.max_steering_offset_rad, std::abs(ed));
         res.max_caster_offset_m = std::max(res.max_caster_offset_m, std::abs(ec));
@@ -117,6 +123,7 @@ MonteCarloResult run_monte_carlo(const MonteCarloOptions& options) {
         }
         ++res.module_samples;
       }
+      res.trial_errors.push_back(errors);
     }
     if (options.progress) options.progress(trial + 1, options.trials);
   }

@@ -45,6 +45,11 @@ TEST(MonteCarlo, NoisyRunReportsNoiseLevelErrorsAndCoverage) {
   EXPECT_GT(res.mae_position_m, 1e-6);
   EXPECT_LT(res.mae_position_m, 1e-3);
   EXPECT_GE(res.coverage_3sigma, 0.95);
+  // One entry per trial; their mean is the MAE (every trial has the same module count).
+  ASSERT_EQ(res.trial_errors.size(), 100U);
+  double mean_r = 0.0;
+  for (const TrialErrors& t : res.trial_errors) mean_r += t.wheel_radius_m / 100.0;
+  EXPECT_NEAR(mean_r, res.mae_wheel_radius_m, 1e-12);
 }
 
 }  // namespace

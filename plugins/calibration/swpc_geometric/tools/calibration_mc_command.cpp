@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "swivel/calibration/monte_carlo.hpp"
+#include "swivel/stats/summary.hpp"
 
 namespace swivel::calibration {
 namespace {
@@ -129,17 +130,28 @@ void run(const Settings& s) {
     const bool noise_free = level.position_m == 0.0 && level.yaw_rad == 0.0;
 
     std::printf("\nmotion-capture noise: %s\n", level.label.c_str());
-    std::printf("  %-14s %-16s %-16s %s\n", "parameter", "MAE (measured)", "max (measured)",
+    std::printf("  %-14s %-12s %-12s %-12s %s\n", "parameter", "MAE", "+- std. err.", "max",
                 "MAE (paper, Table 3)");
-    const auto row = [&](const char* name, double mae, double max, const char* paper) {
-      std::printf("  %-14s %-16.4e %-16.4e %s\n", name, mae, max,
-                  noise_free ? paper : "not reported");
+    // The standard error of each MAE over the trials (the independent draws).
+    const auto standard_error = [&](double TrialErrors::*field, double scale) {
+      if (r.trial_errors.empty()) return 0.0;
+      std::vector<double> v;
+      for (const TrialErrors& t : r.trial_errors) v.push_back(t.*field * scale);
+      return stats::summarize(v).standard_error;
     };
-    row("position [mm]", r.mae_position_m * 1e3, r.max_position_m * 1e3, "6.7818e-15");
-    row("delta [deg]", r.mae_steering_offset_rad / kDeg, r.max_steering_offset_rad / kDeg,
-        "2.7289e-16");
-    row("d [mm]", r.mae_caster_offset_m * 1e3, r.max_caster_offset_m * 1e3, "7.1324e-15");
-    row("r [mm]", r.mae_wheel_radius_m * 1e3, r.max_wheel_radius_m * 1e3, "1.0411e-13");
+    const auto row = [&](const char* name, double mae, double TrialErrors::*field, double scale,
+                         double max, const char* paper) {
+      std::printf("  %-14s %-12.4e %-12.2e %-12.4e %s\n", name, mae * scale,
+                  standard_error(field, scale), max * scale, noise_free ? paper : "not reported");
+    };
+    row("position [mm]", r.mae_position_m, &TrialErrors::position_m, 1e3, r.max_position_m,
+        "6.7818e-15");
+    row("delta [deg]", r.mae_steering_offset_rad, &TrialErrors::steering_offset_rad, 1.0 / kDeg,
+        r.max_steering_offset_rad, "2.7289e-16");
+    row("d [mm]", r.mae_caster_offset_m, &TrialErrors::caster_offset_m, 1e3,
+        r.max_caster_offset_m, "7.1324e-15");
+    row("r [mm]", r.mae_wheel_radius_m, &TrialErrors::wheel_radius_m, 1e3, r.max_wheel_radius_m,
+        "1.0411e-13");
     std::printf("  refused: %zu of %zu trials%s%s\n", r.refused, r.trials,
                 r.refused > 0 ? "; first reason: " : "", r.first_refusal.c_str());
     if (!noise_free) {

@@ -39,6 +39,15 @@ struct MonteCarloOptions {
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
+/// Mean absolute errors over the modules of one trial: the trials are the independent
+/// draws, so the standard errors of the MAEs come from these.
+struct TrialErrors {
+  double position_m = 0.0;
+  double steering_offset_rad = 0.0;
+  double caster_offset_m = 0.0;
+  double wheel_radius_m = 0.0;
+};
+
 struct MonteCarloResult {
   std::size_t trials = 0;
   std::size_t refused = 0;         ///< trials whose calibration refused (excluded from errors)
@@ -54,6 +63,7 @@ struct MonteCarloResult {
   double max_steering_offset_rad = 0.0;
   double max_caster_offset_m = 0.0;
   double max_wheel_radius_m = 0.0;
+  std::vector<TrialErrors> trial_errors;  ///< one per accepted trial
   /// Fraction of per-coordinate errors (x, y, delta, d, r) within 3 reported sigma; only
   /// meaningful with noise (noise-free sigmas are rounding-level).
   double coverage_3sigma = 0.0;
