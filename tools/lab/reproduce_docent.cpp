@@ -23,6 +23,8 @@
 #include <vector>
 
 #include "docent_experiment.hpp"
+#include "gnuplot.hpp"
+#include "swivel/stats/summary.hpp"
 #include "swivel/robot_model_io.hpp"
 
 namespace swivel::lab {
@@ -81,51 +83,65 @@ std::string left(const std::string& text, std::size_t width) {
   return text.size() >= width ? text : text + std::string(width - text.size(), ' ');
 }
 
-double mean(const std::vector<double>& v) {
-  if (v.empty()) return 0.0;
-  double s = 0.0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
-}
+double mean(const std::vector<double>& v) { return stats::summarize(v).mean; }
 
 // Sample standard deviation (n - 1), 0 for fewer than two values.
-double sample_std(const std::vector<double>& v) {
-  if (v.size() < 2) return 0.0;
-  const double m = mean(v);
-  double s = 0.0;
-  for (double x : v) s += (x - m) * (x - m);
-  return std::sqrt(s / static_cast<double>(v.size() - 1));
+double sample_std(const std::vector<double>& v) { return stats::summarize(v).standard_deviation; }
+
+// A sample standard deviation with its standard error, s / sqrt(2 (n - 1)) (normal data).
+stats::Estimate std_estimate(const std::vector<double>& v) {
+  const double s = sample_std(v);
+  return {s, v.size() > 1 ? s / std::sqrt(2.0 * static_cast<double>(v.size() - 1)) : 0.0};
 }
 
-// Per scenario and method, over runs.
+// Per scenario and method, over runs: each with its standard error.
 struct MethodSummary {
-  double mean_max_m = 0.0;
-  double mean_mean_m = 0.0;
-  double std_of_run_means_m = 0.0;
-  double mean_within_std_m = 0.0;
+  stats::Estimate mean_max_m;
+  stats::Estimate mean_mean_m;
+  stats::Estimate std_of_run_means_m;
+  stats::Estimate mean_within_std_m;
 };
 
 struct ScenarioSummary {
   std::array<MethodSummary, kDocentMethodCount> method{};
+  // Max-error reduction vs E/G: 1 - mean(max) / mean(max of E/G), paired by run (fraction).
+  std::array<stats::Estimate, kDocentMethodCount> max_reduction_vs_eg{};
   // Mean-error reduction vs E/G, per run, averaged over runs (fraction).
-  std::array<double, kDocentMethodCount> mean_reduction_vs_eg{};
+  std::array<stats::Estimate, kDocentMethodCount> mean_reduction_vs_eg{};
+  // LCALSM's per-run mean-error reduction minus LCAKF's, averaged over runs (fraction).
+  stats::Estimate lcalsm_minus_lcakf;
 };
 
 ScenarioSummary summarize(const DocentScenarioResult& sr) {
   ScenarioSummary out;
+  std::vector<double> eg_maxes;
+  for (const DocentRunResult& r : sr.runs) {
+    eg_maxes.push_back(r.stats[idx(DocentMethod::kEg)].max_error_m);
+  }
+  std::array<std::vector<double>, kDocentMethodCount> reductions;
   for (DocentMethod m : kMethods) {
-    std::vector<double> maxes, means, within, reductions;
+    std::vector<double> maxes, means, within;
     for (const DocentRunResult& r : sr.runs) {
       const DocentMethodStats& s = r.stats[idx(m)];
       maxes.push_back(s.max_error_m);
       means.push_back(s.mean_error_m);
       within.push_back(s.std_error_m);
       const double eg = r.stats[idx(DocentMethod::kEg)].mean_error_m;
-      reductions.push_back(eg > 0.0 ? (eg - s.mean_error_m) / eg : 0.0);
+      reductions[idx(m)].push_back(eg > 0.0 ? (eg - s.mean_error_m) / eg : 0.0);
     }
-    out.method[idx(m)] = MethodSummary{mean(maxes), mean(means), sample_std(means), mean(within)};
-    out.mean_reduction_vs_eg[idx(m)] = mean(reductions);
+    out.method[idx(m)] = MethodSummary{stats::summarize(maxes).mean_estimate(),
+                                       stats::summarize(means).mean_estimate(), std_estimate(means),
+                                       stats::summarize(within).mean_estimate()};
+    out.mean_reduction_vs_eg[idx(m)] = stats::summarize(reductions[idx(m)]).mean_estimate();
+    const stats::Estimate change = stats::paired_relative_change(eg_maxes, maxes);
+    out.max_reduction_vs_eg[idx(m)] = {-change.value, change.standard_error};
   }
+  std::vector<double> difference;
+  for (std::size_t r = 0; r < sr.runs.size(); ++r) {
+    difference.push_back(reductions[idx(DocentMethod::kLcalsmPaper)][r] -
+                         reductions[idx(DocentMethod::kLcakf)][r]);
+  }
+  out.lcalsm_minus_lcakf = stats::summarize(difference).mean_estimate();
   return out;
 }
 
@@ -195,24 +211,37 @@ std::vector<std::string> assumptions(const RobotModel& nominal,
   };
 }
 
+// Our cells carry "value+-standard error" (entries over runs) or the value alone (one run).
+constexpr std::size_t kOurs = 13;
+constexpr std::size_t kPaper = 7;
+
+std::string with_se(const stats::Estimate& e, double scale) {
+  return fixed(e.value * scale) + "+-" + fixed(e.standard_error * scale);
+}
+
 void print_header_row(std::ostream& os, const std::string& first, std::size_t first_width) {
   os << left(first, first_width);
   for (std::size_t m = 0; m < kPaperMethods; ++m) {
-    os << pad(docent_method_label(kMethods[m]), 8) << pad("paper", 7);
+    os << pad(docent_method_label(kMethods[m]), kOurs) << pad("paper", kPaper);
   }
-  os << " |" << pad(docent_method_label(DocentMethod::kLcalsmHeading), 11)
-     << pad(docent_method_label(DocentMethod::kEkf), 7) << '\n';
+  os << " |" << pad(docent_method_label(DocentMethod::kLcalsmHeading), kOurs + 1)
+     << pad(docent_method_label(DocentMethod::kEkf), kOurs) << '\n';
 }
 
+// Our values in cm (with their standard errors when `se`), the paper's beside them.
 void print_value_row(std::ostream& os, const std::string& first, std::size_t first_width,
-                     const std::array<double, kDocentMethodCount>& ours_cm,
+                     const std::array<stats::Estimate, kDocentMethodCount>& ours_m, bool se,
                      const std::array<std::optional<double>, kPaperMethods>& paper_cm) {
+  const auto cell = [&](DocentMethod m) {
+    const stats::Estimate& e = ours_m[idx(m)];
+    return se ? with_se(e, kCmPerM) : fixed(e.value * kCmPerM);
+  };
   os << left(first, first_width);
   for (std::size_t m = 0; m < kPaperMethods; ++m) {
-    os << pad(fixed(ours_cm[m]), 8) << pad(paper_cm[m] ? fixed(*paper_cm[m]) : "-", 7);
+    os << pad(cell(kMethods[m]), kOurs) << pad(paper_cm[m] ? fixed(*paper_cm[m]) : "-", kPaper);
   }
-  os << " |" << pad(fixed(ours_cm[idx(DocentMethod::kLcalsmHeading)]), 11)
-     << pad(fixed(ours_cm[idx(DocentMethod::kEkf)]), 7) << '\n';
+  os << " |" << pad(cell(DocentMethod::kLcalsmHeading), kOurs + 1)
+     << pad(cell(DocentMethod::kEkf), kOurs) << '\n';
 }
 
 void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& results,
@@ -220,8 +249,9 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
                   const std::vector<std::string>& assumption_lines) {
   const std::size_t runs = results.front().runs.size();
   os << "swivel-lab reproduce docent: PAPERS.md §2 (E/G, LCAKF, LCALSM) in simulation\n"
-     << "Our values are measured in simulation; columns labelled \"paper\" are the paper's "
-        "published values.\n\nAssumptions:\n";
+     << "Our values are measured in simulation, as mean+-standard error over the runs where "
+        "they are over runs; columns labelled \"paper\" are the paper's published values.\n\n"
+        "Assumptions:\n";
   for (const std::string& a : assumption_lines) os << "  - " << a << '\n';
 
   os << "\nRuns drawn (true robot):\n"
@@ -239,14 +269,20 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
     }
   }
 
-  os << "\nTable 1. Maximum error (cm, mean of " << runs << " runs; paper: mean of 5)\n";
+  const auto column = [&](std::size_t s, stats::Estimate MethodSummary::*field) {
+    std::array<stats::Estimate, kDocentMethodCount> out{};
+    for (DocentMethod m : kMethods) out[idx(m)] = summaries[s].method[idx(m)].*field;
+    return out;
+  };
+
+  os << "\nTable 1. Maximum error (cm, mean+-standard error over " << runs
+     << " runs; paper: mean of 5)\n";
   print_header_row(os, "scenario", 9);
   for (std::size_t s = 0; s < results.size(); ++s) {
-    std::array<double, kDocentMethodCount> ours{};
-    for (DocentMethod m : kMethods) ours[idx(m)] = summaries[s].method[idx(m)].mean_max_m * kCmPerM;
     std::array<std::optional<double>, kPaperMethods> paper{};
     for (std::size_t m = 0; m < kPaperMethods; ++m) paper[m] = kPaperMaxCm[s][m];
-    print_value_row(os, results[s].scenario.name, 9, ours, paper);
+    print_value_row(os, results[s].scenario.name, 9, column(s, &MethodSummary::mean_max_m), true,
+                    paper);
   }
 
   for (std::size_t s = 0; s < results.size(); ++s) {
@@ -254,41 +290,38 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
     os << "\nTable 2. Mean error per run (cm), " << sr.scenario.name << '\n';
     print_header_row(os, "run", 9);
     for (std::size_t r = 0; r < sr.runs.size(); ++r) {
-      std::array<double, kDocentMethodCount> ours{};
-      for (DocentMethod m : kMethods) ours[idx(m)] = sr.runs[r].stats[idx(m)].mean_error_m * kCmPerM;
+      std::array<stats::Estimate, kDocentMethodCount> ours{};
+      for (DocentMethod m : kMethods) ours[idx(m)] = {sr.runs[r].stats[idx(m)].mean_error_m, 0.0};
       std::array<std::optional<double>, kPaperMethods> paper{};
       if (r < kPaperRuns) {
         for (std::size_t m = 0; m < kPaperMethods; ++m) paper[m] = kPaperMeanCm[s][r][m];
       }
-      print_value_row(os, std::to_string(r + 1), 9, ours, paper);
+      print_value_row(os, std::to_string(r + 1), 9, ours, false, paper);
     }
-    std::array<double, kDocentMethodCount> ours{};
-    for (DocentMethod m : kMethods) ours[idx(m)] = summaries[s].method[idx(m)].mean_mean_m * kCmPerM;
     std::array<std::optional<double>, kPaperMethods> paper{};
     for (std::size_t m = 0; m < kPaperMethods; ++m) {
       double sum = 0.0;
       for (const auto& run : kPaperMeanCm[s]) sum += run[m];
       paper[m] = sum / static_cast<double>(kPaperRuns);
     }
-    print_value_row(os, "mean", 9, ours, paper);
+    print_value_row(os, "mean", 9, column(s, &MethodSummary::mean_mean_m), true, paper);
   }
 
-  os << "\nTable 3. Reduction ratios (%)\n"
-     << left("", 46) << pad("S1", 8) << pad("paper", 8) << pad("S2", 8) << pad("paper", 8) << '\n';
+  constexpr std::size_t kRatio = 15;
+  os << "\nTable 3. Reduction ratios (%), mean+-standard error over runs\n"
+     << left("", 46) << pad("S1", kRatio) << pad("paper", 8) << pad("S2", kRatio)
+     << pad("paper", 8) << '\n';
   auto ratio_row = [&](const std::string& label, auto ours_fn, auto paper_fn) {
     os << left(label, 46);
     for (std::size_t s = 0; s < results.size(); ++s) {
-      os << pad(fixed(100.0 * ours_fn(s)), 8);
+      os << pad(with_se(ours_fn(s), 100.0), kRatio);
       const std::optional<double> p = paper_fn(s);
       os << pad(p ? fixed(*p) : "-", 8);
     }
     os << '\n';
   };
   auto max_red = [&](DocentMethod m) {
-    return [&, m](std::size_t s) {
-      return reduction(summaries[s].method[idx(DocentMethod::kEg)].mean_max_m,
-                       summaries[s].method[idx(m)].mean_max_m);
-    };
+    return [&, m](std::size_t s) { return summaries[s].max_reduction_vs_eg[idx(m)]; };
   };
   auto paper_max_red = [](std::size_t m) {
     return [m](std::size_t s) -> std::optional<double> {
@@ -316,10 +349,7 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
   ratio_row("mean-error reduction vs E/G: EKF*", mean_red(DocentMethod::kEkf), none);
   ratio_row(
       "LCALSM's mean-error reduction minus LCAKF's",
-      [&](std::size_t s) {
-        return summaries[s].mean_reduction_vs_eg[idx(DocentMethod::kLcalsmPaper)] -
-               summaries[s].mean_reduction_vs_eg[idx(DocentMethod::kLcakf)];
-      },
+      [&](std::size_t s) { return summaries[s].lcalsm_minus_lcakf; },
       [](std::size_t s) -> std::optional<double> {
         const PaperDerived d = paper_derived(s);
         return 100.0 * (d.mean_reduction_vs_eg[2] - d.mean_reduction_vs_eg[1]);
@@ -327,37 +357,34 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
   os << "  mean-error reductions are per run (E/G - method)/E/G, averaged over runs; the paper "
         "column is recomputed\n  from its Table 2 with that definition. The paper states "
      << fixed(kPaperAdvantageOverLcakfPct) << " % on average for the last row without a "
-        "definition. Max-error reductions use Table 1.\n";
+        "definition.\n  Max-error reductions use Table 1; their standard error pairs each "
+        "run's maxima (first order).\n";
 
   os << "\nTable 4. Error standard deviation (cm)\n";
   print_header_row(os, "scenario statistic", 30);
   for (std::size_t s = 0; s < results.size(); ++s) {
     const PaperDerived d = paper_derived(s);
-    std::array<double, kDocentMethodCount> across{};
-    std::array<double, kDocentMethodCount> within{};
-    for (DocentMethod m : kMethods) {
-      across[idx(m)] = summaries[s].method[idx(m)].std_of_run_means_m * kCmPerM;
-      within[idx(m)] = summaries[s].method[idx(m)].mean_within_std_m * kCmPerM;
-    }
     std::array<std::optional<double>, kPaperMethods> paper{};
     for (std::size_t m = 0; m < kPaperMethods; ++m) paper[m] = d.std_of_run_means_cm[m];
-    print_value_row(os, results[s].scenario.name + " across runs", 30, across, paper);
-    print_value_row(os, results[s].scenario.name + " within runs", 30, within, {});
+    print_value_row(os, results[s].scenario.name + " across runs", 30,
+                    column(s, &MethodSummary::std_of_run_means_m), true, paper);
+    print_value_row(os, results[s].scenario.name + " within runs", 30,
+                    column(s, &MethodSummary::mean_within_std_m), true, {});
   }
   os << "  across runs: sample std of the per-run mean errors (paper: recomputed from its "
-        "Table 2); within runs: std of\n  the errors along each run, averaged over runs (the "
-        "paper gives no per-sample data).\n";
+        "Table 2), +- s/sqrt(2(n-1));\n  within runs: std of the errors along each run, "
+        "averaged over runs (the paper gives no per-sample data).\n";
 
   os << "\nReading:\n";
   for (std::size_t s = 0; s < results.size(); ++s) {
     const auto& m = summaries[s].method;
     os << "  " << results[s].scenario.name << ": LCALSM (paper mode) max error "
-       << fixed(m[idx(DocentMethod::kLcalsmPaper)].mean_max_m * kCmPerM) << " cm vs E/G "
-       << fixed(m[idx(DocentMethod::kEg)].mean_max_m * kCmPerM) << " cm ("
-       << fixed(100.0 * max_red(DocentMethod::kLcalsmPaper)(s)) << " % reduction; paper "
+       << with_se(m[idx(DocentMethod::kLcalsmPaper)].mean_max_m, kCmPerM) << " cm vs E/G "
+       << with_se(m[idx(DocentMethod::kEg)].mean_max_m, kCmPerM) << " cm ("
+       << with_se(max_red(DocentMethod::kLcalsmPaper)(s), 100.0) << " % reduction; paper "
        << fixed(kPaperMaxReductionPct[s]) << " %); heading_aligned variant "
-       << fixed(m[idx(DocentMethod::kLcalsmHeading)].mean_max_m * kCmPerM) << " cm ("
-       << fixed(100.0 * max_red(DocentMethod::kLcalsmHeading)(s)) << " %)\n";
+       << with_se(m[idx(DocentMethod::kLcalsmHeading)].mean_max_m, kCmPerM) << " cm ("
+       << with_se(max_red(DocentMethod::kLcalsmHeading)(s), 100.0) << " %)\n";
   }
   os << "  A k-point line fit over a short window (k = 10 points, 0.2 m) cannot see a drift "
         "that is smooth over metres;\n  the heading_aligned variant projects onto the line the "
@@ -431,15 +458,25 @@ nlohmann::json to_json(const RobotModel& nominal, const DocentExperimentConfig& 
     }
     for (DocentMethod m : kMethods) {
       const MethodSummary& ms = summaries[s].method[idx(m)];
+      const stats::Estimate& max_red = summaries[s].max_reduction_vs_eg[idx(m)];
+      const stats::Estimate& mean_red = summaries[s].mean_reduction_vs_eg[idx(m)];
       js["summary"][docent_method_key(m)] = {
-          {"mean_max_error_m", ms.mean_max_m},
-          {"mean_mean_error_m", ms.mean_mean_m},
-          {"std_of_run_mean_errors_m", ms.std_of_run_means_m},
-          {"mean_within_run_std_m", ms.mean_within_std_m},
-          {"max_error_reduction_vs_eg",
-           reduction(summaries[s].method[idx(DocentMethod::kEg)].mean_max_m, ms.mean_max_m)},
-          {"mean_error_reduction_vs_eg", summaries[s].mean_reduction_vs_eg[idx(m)]}};
+          {"mean_max_error_m", ms.mean_max_m.value},
+          {"mean_max_error_standard_error_m", ms.mean_max_m.standard_error},
+          {"mean_mean_error_m", ms.mean_mean_m.value},
+          {"mean_mean_error_standard_error_m", ms.mean_mean_m.standard_error},
+          {"std_of_run_mean_errors_m", ms.std_of_run_means_m.value},
+          {"std_of_run_mean_errors_standard_error_m", ms.std_of_run_means_m.standard_error},
+          {"mean_within_run_std_m", ms.mean_within_std_m.value},
+          {"mean_within_run_std_standard_error_m", ms.mean_within_std_m.standard_error},
+          {"max_error_reduction_vs_eg", max_red.value},
+          {"max_error_reduction_vs_eg_standard_error", max_red.standard_error},
+          {"mean_error_reduction_vs_eg", mean_red.value},
+          {"mean_error_reduction_vs_eg_standard_error", mean_red.standard_error}};
     }
+    js["summary"]["lcalsm_minus_lcakf_mean_error_reduction"] = {
+        {"mean", summaries[s].lcalsm_minus_lcakf.value},
+        {"standard_error", summaries[s].lcalsm_minus_lcakf.standard_error}};
     const PaperDerived d = paper_derived(s);
     json jp;
     for (std::size_t m = 0; m < kPaperMethods; ++m) {
@@ -488,19 +525,6 @@ void write_plot_data(const fs::path& dir, const std::vector<DocentScenarioResult
       err << '\n';
     }
   }
-}
-
-std::string gnuplot_quote(const fs::path& p) {
-  std::string s = p.string();
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string shell_quote(const fs::path& p) {
-  std::string out = "'";
-  for (char c : p.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
 }
 
 // Writes plots.gp next to the data and runs gnuplot on it.
@@ -572,12 +596,7 @@ void write_plots(const fs::path& dir, const std::vector<DocentScenarioResult>& r
 
   const fs::path script = dir / "plots.gp";
   std::ofstream(script) << g.str();
-  const std::string cmd = "gnuplot " + shell_quote(script) + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  if (status != 0) {
-    throw std::runtime_error("gnuplot failed on " + script.string() +
-                             " (is gnuplot installed?); the tables and results.json were written");
-  }
+  run_gnuplot(script, "the tables and results.json");
 }
 
 int run_reproduce_docent(const DocentCommandOptions& o) {
