@@ -2,9 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <optional>
 #include <string>
 
 #include "swivel/config/config_error.hpp"
+#include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
 namespace {
@@ -71,6 +74,67 @@ TEST(DdsOptions, RejectsABadRosNamespace) {
   const std::string message = error_of("ros2: {namespace: 'robot 1'}");
   EXPECT_NE(message.find("dds.ros2.namespace"), std::string::npos) << message;
   EXPECT_NE(message.find("'robot 1'"), std::string::npos) << message;
+}
+
+// Sets or clears CYCLONEDDS_URI for one test and puts the old value back.
+class ScopedUri {
+ public:
+  explicit ScopedUri(const char* value) {
+    if (const char* old = std::getenv("CYCLONEDDS_URI")) old_ = old;
+    if (value != nullptr) {
+      ::setenv("CYCLONEDDS_URI", value, 1);
+    } else {
+      ::unsetenv("CYCLONEDDS_URI");
+    }
+  }
+  ~ScopedUri() {
+    if (old_) {
+      ::setenv("CYCLONEDDS_URI", old_->c_str(), 1);
+    } else {
+      ::unsetenv("CYCLONEDDS_URI");
+    }
+  }
+  ScopedUri(const ScopedUri&) = delete;
+  ScopedUri& operator=(const ScopedUri&) = delete;
+
+ private:
+  std::optional<std::string> old_;
+};
+
+// The documented rule: the environment wins over dds.config, so that a service drop-in
+// setting CYCLONEDDS_URI (the DDS Security profile) takes effect.
+TEST(DdsConfigRule, EnvironmentOverridesTheConfigurationFile) {
+  const ScopedUri uri("file:///etc/swivel/security/identities/swiveld/cyclonedds.xml");
+  const ResolvedConfig resolved = resolve_config("file:///etc/swivel/dds/loopback.xml");
+
+  EXPECT_EQ(resolved.uri, "") << "Cyclone must read CYCLONEDDS_URI itself";
+  EXPECT_NE(resolved.description.find("security/identities/swiveld"), std::string::npos)
+      << resolved.description;
+  EXPECT_NE(resolved.description.find("overrides dds.config file:///etc/swivel/dds/loopback.xml"),
+            std::string::npos)
+      << resolved.description;
+}
+
+TEST(DdsConfigRule, ConfigurationFileWhenTheEnvironmentIsUnset) {
+  const ScopedUri uri(nullptr);
+  const ResolvedConfig resolved = resolve_config("file:///etc/swivel/dds/loopback.xml");
+
+  EXPECT_EQ(resolved.uri, "file:///etc/swivel/dds/loopback.xml");
+  EXPECT_NE(resolved.description.find("dds.config"), std::string::npos) << resolved.description;
+}
+
+TEST(DdsConfigRule, EmptyEnvironmentCountsAsUnset) {
+  const ScopedUri uri("");
+  EXPECT_EQ(resolve_config("file:///x.xml").uri, "file:///x.xml");
+}
+
+TEST(DdsConfigRule, LoopbackWhenNeitherIsGiven) {
+  const ScopedUri uri(nullptr);
+  const ResolvedConfig resolved = resolve_config();
+
+  EXPECT_EQ(resolved.uri.rfind("file://", 0), 0u) << resolved.uri;
+  EXPECT_NE(resolved.uri.find("loopback.xml"), std::string::npos) << resolved.uri;
+  EXPECT_EQ(tool_config_uri(), resolved.uri);
 }
 
 }  // namespace

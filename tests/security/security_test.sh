@@ -221,4 +221,76 @@ case_profile_scripts_are_idempotent() {
   echo "ok: bad roles and names are refused"
 }
 
+# The service as installed, with the documented drop-in (services/security/secure-dropin.conf):
+# the real swiveld, whose installed swiveld.yaml also names dds.config (loopback), must run
+# secured, so a participant without the profile's credentials neither reads nor commands it.
+case_installed_service_with_secure_dropin_refuses_strangers() {
+  local unit=${SWIVEL_INSTALLED_UNIT:?} installed=${SWIVEL_INSTALLED_CONFIG:?}
+  local swiveld=${SWIVEL_SWIVELD:?} swivelctl=${SWIVEL_SWIVELCTL:?}
+  local dropin="$scripts/secure-dropin.conf" domain=${SWIVEL_TEST_DOMAIN:?}
+  # The service's environment as systemd builds it: the unit's Environment= lines, then the
+  # drop-in's; the last assignment of a variable wins.
+  local uri
+  uri=$(sed -n 's/^Environment=CYCLONEDDS_URI=//p' "$unit" "$dropin" | tail -n 1)
+  [[ $uri == file:///etc/swivel/security/identities/swiveld/cyclonedds.xml ]] ||
+    fail "unit + drop-in give CYCLONEDDS_URI='$uri', not the profile's daemon configuration"
+  uri=${uri//\/etc\/swivel\/security/$profile}  # the test's profile stands in for /etc's
+
+  # The installed layout: swiveld.yaml with robots/ and dds/ beside it, on this case's domain.
+  local etc="$work/etc/swivel"
+  mkdir -p "$etc"
+  cp -r "$source_dir/config/robots" "$source_dir/config/dds" "$etc/"
+  sed -e "s/^  domain_id: 0 /  domain_id: $domain /" -e 's/^  realtime: true /  realtime: false /' \
+    "$installed" >"$etc/swiveld.yaml"
+  grep -q '^  source: none ' "$etc/swiveld.yaml" ||
+    fail "the installed configuration drives from a script at start-up"
+  grep -q '^  config: dds/loopback.xml ' "$etc/swiveld.yaml" ||
+    fail "the installed configuration no longer names dds.config: this case tests that conflict"
+  grep -q "^  domain_id: $domain " "$etc/swiveld.yaml" || fail "could not move to domain $domain"
+
+  CYCLONEDDS_URI=$uri "$swiveld" --config "$etc/swiveld.yaml" >"$work/robot.log" 2>&1 &
+  robot_pid=$!
+  local up=0
+  for _ in $(seq 200); do
+    grep -q 'DDS: robot' "$work/robot.log" && { up=1; break; }
+    kill -0 "$robot_pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  [[ $up == 1 ]] || { cat "$work/robot.log" >&2; fail "swiveld did not start"; }
+  grep 'DDS: robot' "$work/robot.log"
+  grep -q "CYCLONEDDS_URI=$uri (environment; it overrides dds.config file://$etc/dds/loopback.xml)" \
+    "$work/robot.log" || fail "swiveld's log does not say that the environment overrides dds.config"
+
+  # ctl URI EXPECTED WHAT ARGS...: swivelctl on this domain with configuration URI.
+  ctl() {
+    local with=$1 want=$2 what=$3 got=0
+    shift 3
+    CYCLONEDDS_URI=$with "$swivelctl" "$@" --domain "$domain" >"$work/out" 2>"$work/err" || got=$?
+    sed 's/^/    /' "$work/out" "$work/err" | head -n 5
+    if [[ $want == 0 ]]; then
+      [[ $got == 0 ]] || fail "$what: swivelctl $* exited $got, expected 0"
+    else
+      [[ $got != 0 ]] || fail "$what: swivelctl $* succeeded"
+    fi
+    echo "ok: $what"
+  }
+  ctl "$client" 0 "trusted client reads the pose" echo state --json --count 1 --timeout 15
+  local before
+  before=$(grep -o '"x_m":[^,]*' "$work/out" | head -n 1)
+  ctl "$plain" 1 "participant without security reads nothing" echo state --count 1 --timeout 3
+  ctl "$rogue" 1 "identity from another CA reads nothing" echo state --count 1 --timeout 3
+  # Commands from a stranger reach no reader: the robot stays where it is.
+  CYCLONEDDS_URI=$plain "$swivelctl" drive 0.5 0 0 --for 1.5 --domain "$domain" \
+    >"$work/out" 2>&1 || true
+  ctl "$client" 0 "trusted client reads the pose again" echo state --json --count 1 --timeout 15
+  local after
+  after=$(grep -o '"x_m":[^,]*' "$work/out" | head -n 1)
+  [[ -n $before && $before == "$after" ]] ||
+    fail "the robot moved on a stranger's command ($before -> $after)"
+  echo "ok: the robot has not moved ($after)"
+  kill -TERM "$robot_pid"
+  wait "$robot_pid" || fail "swiveld exited with an error"
+  robot_pid=""
+}
+
 "case_$case"

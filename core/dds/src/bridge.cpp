@@ -74,11 +74,10 @@ double quaternion_to_yaw(double x, double y, double z, double w) noexcept {
 }
 
 struct DdsBridge::Entities {
-  // Without dds.config, CYCLONEDDS_URI decides; without either, Swivel's loopback-only file
-  // (never Cyclone's defaults, which would send discovery out of every interface).
+  // CYCLONEDDS_URI, then dds.config, then Swivel's loopback-only file (resolve_config()):
+  // never Cyclone's defaults, which would send discovery out of every interface.
   explicit Entities(const DdsOptions& options)
-      : participant({options.domain_id,
-                     options.config_uri.empty() ? tool_config_uri() : options.config_uri}) {}
+      : participant({options.domain_id, resolve_config(options.config_uri).uri}) {}
 
   Participant participant;
   dds_entity_t state_writer = 0;

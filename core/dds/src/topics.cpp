@@ -72,17 +72,21 @@ Participant::~Participant() {
   if (handle_ > 0) dds_delete(handle_);
 }
 
-std::string tool_config_uri() {
+ResolvedConfig resolve_config(const std::string& file_uri) {
   const char* env = std::getenv("CYCLONEDDS_URI");
-  if (env != nullptr && *env != '\0') return "";
-  return "file://" + loopback_path();
+  if (env != nullptr && *env != '\0') {
+    std::string description = std::string("CYCLONEDDS_URI=") + env + " (environment";
+    if (!file_uri.empty()) description += "; it overrides dds.config " + file_uri;
+    return {"", description + ")"};
+  }
+  if (!file_uri.empty()) return {file_uri, "dds.config " + file_uri + " (CYCLONEDDS_URI unset)"};
+  const std::string loopback = "file://" + loopback_path();
+  return {loopback, loopback + " (CYCLONEDDS_URI unset)"};
 }
 
-std::string describe_tool_config() {
-  const char* env = std::getenv("CYCLONEDDS_URI");
-  if (env != nullptr && *env != '\0') return std::string("CYCLONEDDS_URI=") + env;
-  return "file://" + loopback_path() + " (CYCLONEDDS_URI unset)";
-}
+std::string tool_config_uri() { return resolve_config().uri; }
+
+std::string describe_tool_config() { return resolve_config().description; }
 
 double monotonic_now_s() noexcept {
   timespec ts{};

@@ -28,8 +28,8 @@ struct Ros2Options {
 struct DdsOptions {
   std::uint32_t domain_id = 0;      ///< dds.domain_id [0, 232]
   /// dds.config: Cyclone configuration file (relative to the configuration file), stored as
-  /// a "file://" URI. "" (the default): CYCLONEDDS_URI when set, otherwise Swivel's
-  /// loopback-only loopback.xml (see tool_config_uri()) — never Cyclone's defaults.
+  /// a "file://" URI. CYCLONEDDS_URI, when set, overrides it; "" (the default) with
+  /// CYCLONEDDS_URI unset: Swivel's loopback-only loopback.xml (see resolve_config()).
   std::string config_uri;
   double publish_rate_hz = 100.0;   ///< dds.publish_rate_hz: state and module states (1..1000)
   double diagnostics_rate_hz = 2.0; ///< dds.diagnostics_rate_hz (0.1..100)

@@ -68,14 +68,26 @@ class Participant {
   dds_entity_t handle_ = 0;
 };
 
-/// The configuration a command-line tool should use: CYCLONEDDS_URI when set, otherwise
-/// the loopback configuration shipped with Swivel (the source tree's
+/// The Cyclone configuration a participant uses, and a line saying where it came from.
+struct ResolvedConfig {
+  /// "file://..." to create the domain with, or "" to let Cyclone read CYCLONEDDS_URI.
+  std::string uri;
+  /// For logs, --help and errors, e.g. "CYCLONEDDS_URI=file:///etc/... (environment)".
+  std::string description;
+};
+
+/// The one rule, for the daemon and every tool: CYCLONEDDS_URI, when set and not empty,
+/// wins, as for any Cyclone DDS program (a systemd drop-in that sets it, e.g. the DDS
+/// Security profile, takes effect); otherwise `file_uri` (the daemon's dds.config) when
+/// not empty; otherwise the loopback configuration shipped with Swivel (the source tree's
 /// config/dds/loopback.xml for a binary in the build tree, the installed
-/// <sysconfdir>/swivel/dds/loopback.xml otherwise). Returns "" when CYCLONEDDS_URI is set,
-/// meaning "let Cyclone read it".
+/// <sysconfdir>/swivel/dds/loopback.xml otherwise), never Cyclone's defaults.
+ResolvedConfig resolve_config(const std::string& file_uri = "");
+
+/// resolve_config("").uri: what a command-line tool uses.
 std::string tool_config_uri();
 
-/// Human-readable description of what tool_config_uri() picks, for --help and errors.
+/// resolve_config("").description, for --help and errors.
 std::string describe_tool_config();
 
 /// CLOCK_MONOTONIC in seconds: the clock of the real-time loop and of every stamp_s.
