@@ -3,8 +3,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -292,7 +294,10 @@ std::string robot_model_to_yaml(const RobotModel& model) {
 
 void save_robot_model(const RobotModel& model, const std::string& path) {
   std::ofstream out(path, std::ios::trunc);
-  if (!out) throw std::runtime_error(path + ": cannot open robot model file for writing");
+  if (!out) {
+    throw std::runtime_error(path + ": cannot open robot model file for writing (" +
+                             std::strerror(errno) + ")");
+  }
   out << robot_model_to_yaml(model);
   out.close();
   if (!out) throw std::runtime_error(path + ": cannot write robot model file");

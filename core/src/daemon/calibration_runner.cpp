@@ -7,6 +7,9 @@
 #include <thread>
 #include <utility>
 
+#include <spdlog/spdlog.h>
+
+#include "calibration_output.hpp"
 #include "swivel/robot_model_io.hpp"
 
 namespace swivel::daemon {
@@ -21,29 +24,6 @@ std::string progress_text(const CalibrationProgress& p) {
 }
 
 }  // namespace
-
-std::string calibrated_model_path(const std::string& model_path, std::time_t now) {
-  namespace fs = std::filesystem;
-  const fs::path original(model_path);
-  std::string stem = original.filename().string();
-  for (const char* extension : {".yaml", ".yml"}) {
-    const std::string ext(extension);
-    if (stem.size() > ext.size() && stem.compare(stem.size() - ext.size(), ext.size(), ext) == 0) {
-      stem.resize(stem.size() - ext.size());
-      break;
-    }
-  }
-  std::tm local{};
-  localtime_r(&now, &local);
-  char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", &local);
-  const std::string base = stem + ".calibrated-" + stamp;
-  fs::path candidate = original.parent_path() / (base + ".yaml");
-  for (int k = 2; fs::exists(candidate); ++k) {
-    candidate = original.parent_path() / (base + "-" + std::to_string(k) + ".yaml");
-  }
-  return candidate.string();
-}
 
 CalibrationRunner::CalibrationRunner(rt::ControlLoop& loop, PluginLoader& loader,
                                      const RobotModel& nominal, std::string model_path,
@@ -228,20 +208,30 @@ void CalibrationRunner::finish_analysis_locked() {
     publish_locked();
     return;
   }
-  try {
-    const std::string path = calibrated_model_path(model_path_, std::time(nullptr));
-    report.model.source_file = path;
-    save_robot_model(report.model, path);
-    calibrated_file_ = path;
-  } catch (const std::exception& e) {
-    set_status_locked("failed", std::string("calibrated, but the model was not written: ") + e.what());
+  const SavedModel saved = save_calibrated_model(report.model, model_path_, std::time(nullptr));
+  fill_modules_locked(report);
+  if (saved.path.empty()) {
+    // Not lost: the parameters stay in this status (swivelctl echo calibration) and the
+    // whole model goes to the log, from where it can be saved by hand.
+    spdlog::error("calibration: the calibrated model could not be written; it follows:\n{}",
+                  robot_model_to_yaml(report.model));
+    set_status_locked("failed", "calibrated, but the model could not be written (" + saved.error +
+                                    "); its parameters are in this status and the whole model "
+                                    "in swiveld's log. Give the service a writable "
+                                    "StateDirectory= (the shipped unit has /var/lib/swivel) or "
+                                    "make one of those folders writable");
     publish_locked();
     return;
   }
+  calibrated_file_ = saved.path;
   set_status_locked("done", "calibrated model written to " + calibrated_file_ +
                                 "; to apply it, restart swiveld with robot_model: " +
                                 calibrated_file_);
   status_.progress = 1.0;
+  publish_locked();
+}
+
+void CalibrationRunner::fill_modules_locked(const CalibrationReport& report) {
   status_.modules.clear();
   for (std::size_t i = 0; i < report.model.modules.size() && i < kMaxModules; ++i) {
     const SwpcModuleParams& m = report.model.modules[i];
@@ -251,7 +241,6 @@ void CalibrationRunner::finish_analysis_locked() {
                                m.wheel_radius_m, u.x_m, u.y_m, u.steering_offset_rad,
                                u.caster_offset_m, u.wheel_radius_m});
   }
-  publish_locked();
 }
 
 }  // namespace swivel::daemon

@@ -2,7 +2,8 @@
 // The daemon's side of a calibration (DESIGN.md "Plugins", calibration kind): creates and
 // configures the calibration plugin, hands it to the real-time loop, follows its progress,
 // takes it back when the loop lets go of it, analyses the recording on a worker thread,
-// writes the calibrated robot model as a new file next to the nominal one and reports
+// writes the calibrated robot model as a new file (calibration_output.hpp: the
+// service's state directory, else next to the nominal one) and reports
 // everything as CalibrationResult samples through a callback.
 //
 // Nothing here runs on the loop thread. Every public method may be called from any
@@ -27,10 +28,6 @@
 
 namespace swivel::daemon {
 
-/// "swpc4.calibrated-20240131T120000.yaml" next to `model_path`, with "-2", "-3", ...
-/// before ".yaml" when that file exists already (never an existing file's name).
-std::string calibrated_model_path(const std::string& model_path, std::time_t now);
-
 class CalibrationRunner {
  public:
   /// Receives every sample to publish (status changes and progress). Called on the thread
@@ -39,7 +36,7 @@ class CalibrationRunner {
 
   /// Not real-time safe. `nominal` and `context` are copied; `context.robot` is replaced by
   /// the copy of `nominal`. `model_path` is the nominal model's file (the calibrated one is
-  /// written next to it).
+  /// written where calibration_output_dirs() says).
   CalibrationRunner(rt::ControlLoop& loop, PluginLoader& loader, const RobotModel& nominal,
                     std::string model_path, PluginContext context,
                     std::string plugin = "swpc_geometric", Publish publish = {});
@@ -82,6 +79,7 @@ class CalibrationRunner {
  private:
   void publish_locked();
   void finish_analysis_locked();
+  void fill_modules_locked(const CalibrationReport& report);
   void set_status_locked(const std::string& status, const std::string& text);
 
   rt::ControlLoop& loop_;

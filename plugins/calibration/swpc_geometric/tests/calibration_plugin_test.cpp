@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "alloc_guard.hpp"
+#include "calibration_output.hpp"
 #include "calibration_runner.hpp"
 #include "swivel/plugin/calibration.hpp"
 #include "swivel/plugin/drivetrain.hpp"
