@@ -1,5 +1,6 @@
 #include "sim_hardware.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdio>
@@ -78,6 +79,8 @@ void SimHardware::configure(const PluginContext& ctx) {
   options.motion_capture = params.boolean_or("motion_capture", true);
   options.sensor_noise = params.boolean_or("sensor_noise", true);
   options.substep_s = params.number_or("substep_s", options.substep_s, 1e-5, 0.01);
+  const auto max_substeps = static_cast<std::int64_t>(
+      params.integer_or("max_substeps_per_read", kDefaultMaxSubstepsPerRead, 2, 10000));
   ParamReader slip = params.child("slip");
   sim::NonSystematicErrors& ns = options.nonsystematic;
   ns.wheel_slip_std = slip.number_or("wheel_std", ns.wheel_slip_std, 0.0, 0.5);
@@ -123,6 +126,8 @@ void SimHardware::configure(const PluginContext& ctx) {
   started_ = false;
   start_stamp_s_ = 0.0;
   last_stamp_s_ = 0.0;
+  world_stamp_s_ = 0.0;
+  max_step_s_ = static_cast<double>(max_substeps) * options.substep_s;
   faults_ = faults;
   fault_count_ = fault_list.size();
   last_wheel_rad_ = {};
@@ -218,15 +223,20 @@ Status SimHardware::read(double stamp_s, HardwareState& out) noexcept {
     started_ = true;
     start_stamp_s_ = stamp_s;
     last_stamp_s_ = stamp_s;
+    world_stamp_s_ = stamp_s;
   }
   if (stamp_s < last_stamp_s_) {
     last_error_ = "sim: stamp went backwards";
     return Status::kError;
   }
-  if (world_->step(stamp_s - last_stamp_s_, command_) != Status::kOk) {
+  // At most max_step_s_ of physics per read: after a stall the world catches up over the
+  // next reads instead of running thousands of substeps in one cycle.
+  const double step_s = std::min(stamp_s - world_stamp_s_, max_step_s_);
+  if (world_->step(step_s, command_) != Status::kOk) {
     last_error_ = world_->last_error();
     return Status::kError;
   }
+  world_stamp_s_ += step_s;
   last_stamp_s_ = stamp_s;
   const double t_s = stamp_s - start_stamp_s_;
   take_injection(t_s);
@@ -244,8 +254,9 @@ Status SimHardware::read(double stamp_s, HardwareState& out) noexcept {
     }
   }
   world_->read(out);
-  // The world counts from zero; readers expect the daemon's clock.
-  out.stamp_s = stamp_s;
+  // The world counts from zero; readers expect the daemon's clock. While catching up, the
+  // reading is of the (earlier) time the world has reached.
+  out.stamp_s = world_stamp_s_;
   out.motion_capture.stamp_s += start_stamp_s_;
   return apply_faults(t_s, out);
 }

@@ -82,10 +82,15 @@ struct SimFault {
 class SimHardware final : public Hardware {
  public:
   static constexpr std::size_t kMaxFaults = 32;
+  /// params.max_substeps_per_read: physics per read() is bounded to this many substeps
+  /// (50 ms at the default 1 ms substep); a longer gap is caught up over later reads.
+  static constexpr std::int64_t kDefaultMaxSubstepsPerRead = 50;
 
   void configure(const PluginContext& ctx) override;
   /// Real-time safe. The first call only starts the clock; later calls advance the world
-  /// from the previous stamp under the last written command, then apply active faults.
+  /// towards `stamp_s` under the last written command (at most max_substeps_per_read
+  /// substeps per call; the reading is stamped with the time the world reached), then apply
+  /// active faults.
   Status read(double stamp_s, HardwareState& out) noexcept override;
   /// Real-time safe. kError for a non-finite setpoint, a wrong module count or an active
   /// write_error fault.
@@ -101,8 +106,10 @@ class SimHardware final : public Hardware {
 
   /// The world (for tests); null before configure().
   [[nodiscard]] const sim::World* world() const noexcept { return world_ ? &*world_ : nullptr; }
-  /// Sim time of the last read (seconds since the first one).
-  [[nodiscard]] double sim_time_s() const noexcept { return last_stamp_s_ - start_stamp_s_; }
+  /// Sim time the world has reached (seconds since the first read).
+  [[nodiscard]] double sim_time_s() const noexcept { return world_stamp_s_ - start_stamp_s_; }
+  /// How far the world is behind the last read's stamp (0 unless catching up after a gap).
+  [[nodiscard]] double behind_s() const noexcept { return last_stamp_s_ - world_stamp_s_; }
   /// Any thread. Injections read() found no free slot for.
   [[nodiscard]] std::uint64_t injections_dropped() const noexcept {
     return injections_dropped_.load(std::memory_order_relaxed);
@@ -123,7 +130,9 @@ class SimHardware final : public Hardware {
   ActuatorCommand command_{};
   bool started_ = false;
   double start_stamp_s_ = 0.0;
-  double last_stamp_s_ = 0.0;
+  double last_stamp_s_ = 0.0;   ///< stamp of the last read
+  double world_stamp_s_ = 0.0;  ///< daemon time the world has reached
+  double max_step_s_ = 0.05;    ///< physics per read at most
   const char* last_error_ = "";
 
   std::array<ActiveFault, kMaxFaults> faults_{};

@@ -61,6 +61,40 @@ TEST_F(SimHardwareTest, StepsTheWorldOnTheDaemonsClock) {
   EXPECT_NEAR(s.wheel_angle_rad[0], 4.0, 2.0 * std::numbers::pi / 4096.0);
 }
 
+// A stalled loop must not make the next read run the whole gap in 1 ms substeps on the
+// real-time thread: each read advances at most max_substeps_per_read substeps, and the world
+// catches up over the following reads.
+TEST_F(SimHardwareTest, AStallIsCaughtUpInBoundedSteps) {
+  SimHardware hw;
+  hw.configure(context("{seed: 3, sensor_noise: false, max_substeps_per_read: 20}"));
+  HardwareState s;
+  ASSERT_EQ(hw.read(100.0, s), Status::kOk);
+  ASSERT_EQ(hw.write(forward_command()), Status::kOk);
+  ASSERT_EQ(hw.read(100.001, s), Status::kOk);
+  EXPECT_NEAR(hw.sim_time_s(), 0.001, 1e-12);
+
+  // A 2 s stall: one read advances 20 ms of physics and says so in its stamp.
+  ASSERT_EQ(hw.read(102.001, s), Status::kOk);
+  EXPECT_NEAR(hw.sim_time_s(), 0.021, 1e-9);
+  EXPECT_NEAR(s.stamp_s, 100.021, 1e-9);
+  EXPECT_NEAR(hw.behind_s(), 1.98, 1e-9);
+
+  // At 1 ms per cycle the world gains 19 ms a read: caught up after 105 more reads.
+  double previous = hw.sim_time_s();
+  int reads = 0;
+  for (int k = 1; hw.behind_s() > 1e-9 && k <= 200; ++k, ++reads) {
+    ASSERT_EQ(hw.read(102.001 + k * 0.001, s), Status::kOk);
+    EXPECT_LE(hw.sim_time_s() - previous, 0.020 + 1e-9);
+    previous = hw.sim_time_s();
+  }
+  EXPECT_EQ(reads, 105);
+  EXPECT_NEAR(s.stamp_s, 102.106, 1e-9);
+  // No motion lost: the wheels turned for the whole 2.106 s at 4 rad/s.
+  Pose2 truth;
+  ASSERT_TRUE(hw.ground_truth(truth));
+  EXPECT_NEAR(truth.x_m, 4.0 * 0.075 * 2.106, 1e-6);
+}
+
 TEST_F(SimHardwareTest, RejectsNonFiniteCommandsAndBackwardTime) {
   SimHardware hw;
   hw.configure(context("{}"));
