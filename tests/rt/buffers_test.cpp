@@ -75,6 +75,35 @@ TEST(SpscRing, CarriesVelocityCommands) {
   EXPECT_EQ(out.sequence, 7U);
 }
 
+// A producer that never runs dry (it refills faster than the consumer pops): the bound is
+// all that ends the drain.
+struct EndlessRing {
+  int next = 0;
+  bool try_pop(int& out) noexcept {
+    out = next++;
+    return true;
+  }
+};
+
+TEST(PopAtMost, StopsAtTheLimitWhateverTheProducerDoes) {
+  EndlessRing ring;
+  int item = 0;
+  int last = -1;
+  const std::size_t popped = pop_at_most(ring, item, 64, [&](int v) { last = v; });
+  EXPECT_EQ(popped, 64U);
+  EXPECT_EQ(last, 63);
+}
+
+TEST(PopAtMost, TakesWhatThereIsBelowTheLimit) {
+  SpscRing<int, 8> ring;
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(ring.try_push(i));
+  int item = 0;
+  int sum = 0;
+  EXPECT_EQ(pop_at_most(ring, item, 8, [&](int v) { sum += v; }), 5U);
+  EXPECT_EQ(sum, 0 + 1 + 2 + 3 + 4);
+  EXPECT_EQ(pop_at_most(ring, item, 8, [&](int v) { sum += v; }), 0U);
+}
+
 TEST(SnapshotBuffer, ReadsInitialValueBeforeAnyWrite) {
   SnapshotBuffer<Pose2> buffer(Pose2{1.0, 2.0, 3.0});
   const Pose2 p = buffer.read();

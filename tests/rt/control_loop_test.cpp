@@ -223,6 +223,22 @@ TEST(ControlLoop, PluginErrorSafeStopsUntilClearedAndHealthy) {
   EXPECT_FALSE(rig.wheels_stopped());
 }
 
+// A NaN in the covariance stops the robot like a NaN pose, and never reaches a subscriber
+// (robot_localization and Nav2 reject it): the published estimate carries no covariance.
+TEST(ControlLoop, NonFiniteCovarianceSafeStopsAndIsNotPublished) {
+  LoopRig rig;
+  rig.drive(0.3, 0.0, 50);
+  rig.localization.nan_covariance = true;
+  rig.drive(0.3, 0.0, 2);
+  const StateSnapshot s = rig.state();
+  EXPECT_EQ(s.mode, LoopMode::kSafeStop);
+  EXPECT_EQ(s.fault, FaultCode::kLocalizationError);
+  EXPECT_STREQ(s.fault_detail.data(), "non-finite pose covariance");
+  EXPECT_TRUE(rig.wheels_stopped());
+  EXPECT_FALSE(s.estimate.has_covariance);
+  for (const double v : s.estimate.covariance) EXPECT_TRUE(std::isfinite(v));
+}
+
 TEST(ControlLoop, ThrowingPluginSafeStopsInsteadOfTerminating) {
   LoopRig rig;
   rig.drive(0.3, 0.0, 50);

@@ -157,6 +157,7 @@ class FakeLocalization final : public Localization {
   std::atomic<bool> malloc_in_update{false};    ///< update() calls malloc/free directly
   std::atomic<bool> throw_in_update{false};     ///< update() throws (a plugin breaking the rules)
   std::atomic<bool> refuse_hand_over{false};    ///< hand_over() returns kError
+  std::atomic<bool> nan_covariance{false};      ///< update() leaves a NaN in the covariance
 
   void configure(const PluginContext&) override {}
   void reset(const PoseEstimate& initial) override { estimate_ = initial; }
@@ -199,6 +200,11 @@ class FakeLocalization final : public Localization {
     if (malloc_in_update.load(std::memory_order_relaxed)) {
       void* volatile block = std::malloc(64);
       std::free(block);
+    }
+    if (nan_covariance.load(std::memory_order_relaxed)) {
+      estimate_.has_covariance = true;
+      estimate_.covariance = {1e-4, 0.0, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e-3};
+      estimate_.covariance[4] = std::numeric_limits<double>::quiet_NaN();
     }
     if (!odometry.valid) return Status::kOk;
     Pose2& p = estimate_.pose;

@@ -44,6 +44,24 @@ bool finite(const ActuatorCommand& c) noexcept {
   return true;
 }
 
+bool finite_covariance(const PoseEstimate& e) noexcept {
+  if (!e.has_covariance) return true;
+  for (const double v : e.covariance) {
+    if (!finite(v)) return false;
+  }
+  return true;
+}
+
+// What is published: a non-finite covariance goes out as none (robot_localization and Nav2
+// reject NaN), while the fault says why.
+PoseEstimate publishable(PoseEstimate e) noexcept {
+  if (!finite_covariance(e)) {
+    e.covariance = {};
+    e.has_covariance = false;
+  }
+  return e;
+}
+
 bool finite(const MotionCaptureSample& m) noexcept {
   return finite(m.stamp_s) && finite(m.pose);
 }
@@ -648,18 +666,20 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     reading_ok = true;
   }
 
-  // Newest motion-capture sample from the external source.
+  // Newest motion-capture sample from the external source: at most one ring's worth per
+  // cycle, so that a source pushing as fast as the loop drains cannot hold the cycle.
   MotionCaptureSample sample;
   MotionCaptureSample newest_sample;
-  while (motion_capture_.try_pop(sample)) {
-    if (!sample.valid) continue;
-    if (finite(sample)) {
-      newest_sample = sample;
-    } else {
-      log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
-                "non-finite motion-capture sample dropped", sample.stamp_s);
-    }
-  }
+  pop_at_most(motion_capture_, sample, kMotionCaptureDrainLimit,
+              [&](const MotionCaptureSample& m) {
+                if (!m.valid) return;
+                if (finite(m)) {
+                  newest_sample = m;
+                } else {
+                  log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
+                            "non-finite motion-capture sample dropped", m.stamp_s);
+                }
+              });
   if (reading_ok && newest_sample.valid && !current_.motion_capture.valid) {
     current_.motion_capture = newest_sample;
   }
@@ -677,6 +697,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
                   thrown != nullptr ? thrown : localization.last_error());
     } else if (!finite(localization.estimate().pose)) {
       raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose estimate");
+    } else if (!finite_covariance(localization.estimate())) {
+      raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose covariance");
     }
     if (odometry.valid) check_odometry(odometry, now_s);
   }
@@ -781,7 +803,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   // Publish.
   ++state_.cycle;
   state_.stamp_s = now_s;
-  state_.estimate = localization.estimate();
+  state_.estimate = publishable(localization.estimate());
   state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
   state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
   state_.command_twist = applied;

@@ -338,6 +338,8 @@ class ControlLoop {
   SwapOutcome retired_outcome_swap_{};
   LatestValue<VelocityCommand> commands_;
   SpscRing<MotionCaptureSample, 64> motion_capture_;
+  /// Motion-capture samples taken per cycle at most: the ring's capacity.
+  static constexpr std::size_t kMotionCaptureDrainLimit = decltype(motion_capture_)::capacity();
   SnapshotBuffer<StateSnapshot> snapshot_;
   TimingStats timing_;
   RtLog log_;

@@ -75,4 +75,18 @@ class SpscRing {
   alignas(kCacheLineBytes) std::array<T, CapacityItems> slots_{};
 };
 
+/// Consumer only. Pops at most `limit` items, handing each to `take`; returns how many. A
+/// consumer that drains with a plain `while (try_pop(...))` can be held indefinitely by a
+/// producer pushing as fast as it pops; a real-time consumer bounds its work instead and
+/// leaves the rest for its next cycle. `Ring` is any type with SpscRing's try_pop().
+template <class Ring, class Item, class Take>
+std::size_t pop_at_most(Ring& ring, Item& item, std::size_t limit, Take&& take) noexcept {
+  std::size_t popped = 0;
+  while (popped < limit && ring.try_pop(item)) {
+    ++popped;
+    take(item);
+  }
+  return popped;
+}
+
 }  // namespace swivel::rt
