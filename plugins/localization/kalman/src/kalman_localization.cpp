@@ -46,6 +46,10 @@ void KalmanLocalization::configure(const PluginContext& ctx) {
   c.initial_yaw_sigma_rad = params.number_or("initial_yaw_sigma_rad", 0.0, 0.0, 10.0);
   c.initial_bias_sigma_radps =
       params.number_or("initial_bias_sigma_radps", c.initial_bias_sigma_radps, 0.0, 10.0);
+  c.handover_position_sigma_m = params.number_or("handover_position_sigma_m",
+                                                  c.handover_position_sigma_m, 0.0, 1e3);
+  c.handover_yaw_sigma_rad =
+      params.number_or("handover_yaw_sigma_rad", c.handover_yaw_sigma_rad, 0.0, 10.0);
   c.lcakf.accel_mps2 = params.number_or("lcakf_accel_noise_mps2", c.lcakf.accel_mps2, 1e-9, 1e3);
   c.lcakf.position_m = params.number_or("lcakf_position_noise_m", c.lcakf.position_m, 1e-9, 1e3);
   params.finish();
@@ -79,18 +83,23 @@ Status KalmanLocalization::hand_over(const PoseEstimate& current) noexcept {
   if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.yaw_rad)) {
     return fail("kalman: non-finite pose handed over");
   }
-  const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> handed(
-      current.covariance.data());
-  const Matrix3 cov = handed;
+  // The outgoing plugin's covariance, or the documented hand-over default when it has none.
+  Matrix3 cov = Matrix3::Zero();
+  if (current.has_covariance) {
+    cov = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(current.covariance.data());
+  } else {
+    const double pos_var = config_.handover_position_sigma_m * config_.handover_position_sigma_m;
+    cov.diagonal() << pos_var, pos_var,
+        config_.handover_yaw_sigma_rad * config_.handover_yaw_sigma_rad;
+  }
   if (config_.mode == KalmanMode::kEkf) {
-    const localization::EkfResult r = ekf_.set_pose(p, current.has_covariance ? &cov : nullptr);
+    const localization::EkfResult r = ekf_.set_pose(p, &cov);
     if (r == localization::EkfResult::kNonFinite) return fail("kalman: non-finite covariance handed over");
     if (r == localization::EkfResult::kNotPsd) return fail("kalman: handed-over covariance is not positive semi-definite");
   } else {
-    if (current.has_covariance && !cov.allFinite()) return fail("kalman: non-finite covariance handed over");
-    lcakf_.set_position(p.x_m, p.y_m, current.has_covariance ? cov(0, 0) : -1.0,
-                        current.has_covariance ? cov(1, 1) : -1.0);
-    if (current.has_covariance) lcakf_yaw_var_ = cov(2, 2);
+    if (!cov.allFinite()) return fail("kalman: non-finite covariance handed over");
+    lcakf_.set_position(p.x_m, p.y_m, cov(0, 0), cov(1, 1));
+    lcakf_yaw_var_ = cov(2, 2);
   }
   eg_.reset(p);
   return Status::kOk;

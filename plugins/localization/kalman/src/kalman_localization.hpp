@@ -20,6 +20,11 @@ struct KalmanConfig {
   double initial_position_sigma_m = 0.0;
   double initial_yaw_sigma_rad = 0.0;
   double initial_bias_sigma_radps = 0.02;
+  /// Uncertainty taken on at a hand-over from a plugin that has no covariance (raw_eg,
+  /// lsm): a pose from unbounded dead reckoning is not exact, and a filter that starts with
+  /// zero covariance would ignore every motion-capture fix for a long time.
+  double handover_position_sigma_m = 0.1;
+  double handover_yaw_sigma_rad = 0.05;
   bool use_pose_fixes = true;           ///< ekf: update from valid motion-capture samples
 };
 
@@ -30,7 +35,8 @@ class KalmanLocalization final : public Localization {
   /// yaw_noise_rad_per_sqrt_m, bias_random_walk_radps_per_sqrt_s, gyro_noise_radps
   /// (default: robot sensors.gyro.noise_rad_s), fix_position_noise_m, fix_yaw_noise_rad
   /// (default: robot sensors.motion_capture), use_pose_fixes, initial_position_sigma_m,
-  /// initial_yaw_sigma_rad, initial_bias_sigma_radps, lcakf_accel_noise_mps2,
+  /// initial_yaw_sigma_rad, initial_bias_sigma_radps, handover_position_sigma_m (0.1),
+  /// handover_yaw_sigma_rad (0.05), lcakf_accel_noise_mps2,
   /// lcakf_position_noise_m. @throws ConfigError naming the key.
   void configure(const PluginContext& ctx) override;
 

@@ -55,6 +55,31 @@ TEST(KalmanLocalization, HandOverKeepsPoseAndCovariance) {
   EXPECT_STREQ(loc.last_error(), "kalman: handed-over covariance is not positive semi-definite");
 }
 
+// From raw_eg or lsm (no covariance) the filter takes on the documented hand-over
+// uncertainty, not zero: with zero it would trust the dead-reckoned pose over every fix.
+TEST(KalmanLocalization, HandOverWithoutCovarianceTakesTheDefaultUncertainty) {
+  RobotModel robot;
+  for (const char* mode : {"{mode: ekf}", "{mode: lcakf}"}) {
+    SCOPED_TRACE(mode);
+    KalmanLocalization loc;
+    loc.configure(context(robot, mode));
+    PoseEstimate handed;
+    handed.pose = {2.0, -1.0, 0.5};
+    ASSERT_EQ(loc.hand_over(handed), Status::kOk);
+    const PoseEstimate e = loc.estimate();
+    ASSERT_TRUE(e.has_covariance);
+    EXPECT_NEAR(e.covariance[0], 0.1 * 0.1, 1e-12);
+    EXPECT_NEAR(e.covariance[4], 0.1 * 0.1, 1e-12);
+    EXPECT_NEAR(e.covariance[8], 0.05 * 0.05, 1e-12);
+    EXPECT_DOUBLE_EQ(e.pose.x_m, 2.0);
+  }
+  KalmanLocalization tuned;
+  tuned.configure(context(robot, "{handover_position_sigma_m: 0.3, handover_yaw_sigma_rad: 0.1}"));
+  ASSERT_EQ(tuned.hand_over(PoseEstimate{}), Status::kOk);
+  EXPECT_NEAR(tuned.estimate().covariance[0], 0.09, 1e-12);
+  EXPECT_NEAR(tuned.estimate().covariance[8], 0.01, 1e-12);
+}
+
 TEST(KalmanLocalization, MotionCaptureSampleCorrectsPose) {
   RobotModel robot;
   KalmanLocalization loc;
