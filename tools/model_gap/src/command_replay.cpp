@@ -52,9 +52,15 @@ double mean_nearest(const std::vector<double>& t, const std::vector<double>& v, 
 // window is not compared.
 constexpr double kMaxSwingGrowth = 0.5;
 
-// Windows in which no caster leads its motion for long: along the path (body twist from the
-// dead-reckoned poses), a caster's angle error grows at -(u . v_s) / d, positive while it
-// leads; its integral over a window must stay below kMaxSwingGrowth.
+// How hard the replay pushes a leading caster off its unstable equilibrium towards the branch
+// the log shows (follow_logged_branch()); the instability does the rest.
+constexpr double kBranchNudgeRadps = 0.5;
+
+// Windows in which no caster leads its motion for long, and none has the instantaneous
+// centre of rotation near its steering axis: along the path (body twist from the
+// dead-reckoned poses), a caster's angle error grows at -(u . v_s) / d while it leads; where
+// |v_s| < 2 d |w| it has no steady state near and turns with the body (|w| counted instead).
+// The sum over a window must stay below kMaxSwingGrowth.
 std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& run,
                                      const std::vector<Window>& windows, const std::vector<Pose2>& path) {
   std::vector<char> out(windows.size(), 1);
@@ -72,15 +78,45 @@ std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& r
       const double vy = twist.vy_mps + twist.wz_radps * m.x_m;
       const double phi = run.steer_rad[i][k - 1] + m.steering_offset_rad;
       const double lambda = -(std::cos(phi) * vx + std::sin(phi) * vy) / m.caster_offset_m;
-      growth[k] = std::max(growth[k], std::max(0.0, lambda) * dt);
+      const bool near_centre = std::hypot(vx, vy) < 2.0 * m.caster_offset_m * std::abs(twist.wz_radps);
+      const double rate = std::max(std::max(0.0, lambda), near_centre ? std::abs(twist.wz_radps) : 0.0);
+      growth[k] = std::max(growth[k], rate * dt);
     }
   }
+  bool previous_swung = false;
   for (std::size_t j = 0; j < windows.size(); ++j) {
     double g = 0.0;
     for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) g += growth[k];
-    out[j] = g <= kMaxSwingGrowth ? 1 : 0;
+    const bool swung = g > kMaxSwingGrowth;
+    // A caster that swung starts the next window wherever its swing left it: not compared
+    // either.
+    out[j] = swung || previous_swung ? 0 : 1;
+    previous_swung = swung;
   }
   return out;
+}
+
+// A caster that leads its motion sits on an unstable equilibrium: the replay, free of
+// disturbances, can hold it there for ever, while the robot's casters swing round (passive
+// self-aligning casters always do). Where the log shows a caster in the other branch (more
+// than a quarter turn from the replay's) while the replay's leads, the replay is nudged
+// towards the log's side and swings the way the robot did; afterwards both are compared in
+// the same branch. The swing itself is in windows that are not compared.
+void follow_logged_branch(const sim::PlantParams& plant, const Twist2& twist, const RunData& run,
+                          std::size_t row, const HardwareState& measured, ActuatorCommand& command) {
+  const double limit = plant.limits.steering_rate_radps.value_or(0.0);
+  for (std::size_t i = 0; i < run.steer_rad.size(); ++i) {
+    const SwpcModuleParams& m = plant.modules[i];
+    const double apart = wrap_pi(run.steer_rad[i][row] - measured.steer_angle_rad[i]);
+    if (std::abs(apart) <= 0.5 * std::numbers::pi) continue;
+    const double phi = measured.steer_angle_rad[i] + m.steering_offset_rad;
+    const double vx = twist.vx_mps - twist.wz_radps * m.y_m;
+    const double vy = twist.vy_mps + twist.wz_radps * m.x_m;
+    if (std::cos(phi) * vx + std::sin(phi) * vy >= 0.0) continue;  // trailing: stable
+    double& rate = command.steer_rate_radps[i];
+    rate += std::copysign(kBranchNudgeRadps, apart);
+    if (limit > 0.0) rate = std::clamp(rate, -limit, limit);
+  }
 }
 
 }  // namespace
@@ -156,7 +192,7 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
   for (std::size_t k = 1; k < n; ++k) {
     const double dt = run.t_s[k] - run.t_s[k - 1];
     std::array<double, kMaxModules> start{};
-    for (std::size_t i = 0; i < modules_; ++i) start[i] = world.true_steer_rad(i);
+    for (std::size_t i = 0; i < modules_; ++i) start[i] = world.sensed_steer_rad(i);
     const auto substeps = static_cast<int>(std::max(1.0, std::ceil(dt / max_substep - 1e-9)));
     const double h = dt / substeps;
     for (int s = 0; s < substeps; ++s) {
@@ -167,20 +203,22 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
       const Twist2 cmd{mean_nearest(run.t_s, run.cmd_vx_mps, t0, t0 + h, hint),
                        mean_nearest(run.t_s, run.cmd_vy_mps, t0, t0 + h, hint),
                        mean_nearest(run.t_s, run.cmd_wz_radps, t0, t0 + h, cmd_hint)};
-      // The controller steers from the angles its encoders show, at its own rate.
+      // The controller steers from the angles its encoders show (late by any sensor
+      // latency), at its own rate.
       if (swpc_) {
-        for (std::size_t i = 0; i < modules_; ++i) {
-          measured.steer_angle_rad[i] = world.true_steer_rad(i) - plant.modules[i].steering_offset_rad;
-        }
+        for (std::size_t i = 0; i < modules_; ++i) measured.steer_angle_rad[i] = world.steer_reading_rad(i);
       }
-      controller.velocity(limiter.step(cmd, h), measured, command);
+      const Twist2 limited = limiter.step(cmd, h);
+      controller.velocity(limited, measured, command);
+      if (swpc_) follow_logged_branch(plant, limited, run, k, measured, command);
       if (world.step(h, command) != Status::kOk) return false;
     }
     world.read(hw);
     record(k);
     if (swpc_) {
       for (std::size_t i = 0; i < modules_; ++i) {
-        track.steer[i][k] = world.true_steer_rad(i) - start[i];
+        // As the log's angles are: late by any sensor latency.
+        track.steer[i][k] = world.sensed_steer_rad(i) - start[i];
       }
     }
   }

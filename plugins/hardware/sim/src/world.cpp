@@ -398,6 +398,21 @@ void World::sensor_sample_at(double t_s, SensorSample& out) const noexcept {
   }
 }
 
+double World::steer_reading_rad(std::size_t i) const noexcept {
+  if (i >= n_ || plant_.drivetrain != DrivetrainKind::kSwpc) return 0.0;
+  SensorSample s;
+  sensor_sample_at(t_s_ - plant_.sensor_delay_s, s);
+  return quantize(s.phi_rad[i] - plant_.modules[i].steering_offset_rad,
+                  plant_.sensors.steering_encoder_counts_per_rev);
+}
+
+double World::sensed_steer_rad(std::size_t i) const noexcept {
+  if (i >= n_ || plant_.drivetrain != DrivetrainKind::kSwpc) return 0.0;
+  SensorSample s;
+  sensor_sample_at(t_s_ - plant_.sensor_delay_s, s);
+  return s.phi_rad[i];
+}
+
 void World::read(HardwareState& out) noexcept {
   SensorSample s;
   sensor_sample_at(t_s_ - plant_.sensor_delay_s, s);

@@ -261,6 +261,13 @@ TEST(World, ActuatorsRunTheSameWithTheBodyHeldStill) {
     for (std::size_t i = 0; i < 4; ++i) {
       ASSERT_EQ(ha.wheel_angle_rad[i], hb.wheel_angle_rad[i]) << k;
       ASSERT_EQ(ha.steer_angle_rad[i], hb.steer_angle_rad[i]) << k;
+      // The encoder as a controller between readings sees it: late by the latency too.
+      ASSERT_EQ(b.steer_reading_rad(i), hb.steer_angle_rad[i]) << k;
+      // And the angle behind it, before offset and quantization.
+      ASSERT_NEAR(b.sensed_steer_rad(i) - model.modules[i].steering_offset_rad,
+                  hb.steer_angle_rad[i],
+                  2.0 * std::numbers::pi / model.sensors.steering_encoder_counts_per_rev)
+          << k;
     }
     controller.velocity(Twist2{0.3, 0.1 * std::sin(0.05 * k), 0.2}, ha, command);
     a.step(0.01, command);

@@ -90,6 +90,13 @@ class World {
   [[nodiscard]] const Twist2& true_twist() const noexcept { return twist_; }
   /// True steering angle of module i (swpc), unwrapped, rad.
   [[nodiscard]] double true_steer_rad(std::size_t i) const noexcept { return modules_[i].phi_rad; }
+  /// Real-time safe. What module i's steering encoder reads now (sensor latency, offset and
+  /// quantization as in read()), without taking a reading: for a controller that runs
+  /// between the readings a log keeps.
+  [[nodiscard]] double steer_reading_rad(std::size_t i) const noexcept;
+  /// Real-time safe. True steering angle of module i as the sensors see it now: late by the
+  /// sensor latency, unwrapped, without offset or quantization, rad.
+  [[nodiscard]] double sensed_steer_rad(std::size_t i) const noexcept;
   /// True steering rate of module i over the last sub-step, rad/s.
   [[nodiscard]] double true_steer_rate_radps(std::size_t i) const noexcept {
     return modules_[i].steer_rate_radps;
