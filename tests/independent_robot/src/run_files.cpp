@@ -94,7 +94,10 @@ std::string nominal_model_yaml(const RunSpec& spec) {
        ", yaw_noise_rad: " + yaml_number(kMocapYawNoiseRad) +
        ", rate_hz: " + yaml_number(kMocapRateHz) + "}\n";
   const bool accel = spec.model_limits == ModelLimits::kAll;
-  const bool steering = swpc && spec.model_limits != ModelLimits::kNone;
+  // Passive, self-aligning casters have no steering motor whose rate a limit could state:
+  // they swing as fast as the motion turns them.
+  const bool steering = swpc && spec.steering != Steering::kSelfAligning &&
+                        spec.model_limits != ModelLimits::kNone;
   if (accel || steering) {
     y += "limits:\n";
     if (accel) {
