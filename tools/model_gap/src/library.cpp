@@ -14,6 +14,8 @@ namespace {
 // (5 ms on a four-caster robot) where the robot does per control cycle, which moves a
 // ramp's ends by up to half a sub-step.
 constexpr double kLimitResolution = 0.01;
+// Candidate::relative_resolution of a sensor latency.
+constexpr double kLatencyResolution = 0.005;
 
 // Typical magnitude of each effect parameter: the fit works in units of it, and it sets the
 // finite-difference step.
@@ -66,6 +68,7 @@ void add_limit(Candidate& c, RobotModel model, const std::string& key, double pe
   c.identity.push_back(identity);
   c.inverse.push_back(1);
   c.resolution.push_back(0.0);  // relative: see Candidate::sigma
+  c.relative_resolution.push_back(0.0);
 }
 
 }  // namespace
@@ -104,11 +107,12 @@ double Candidate::value(std::size_t i, double fit) const {
 
 double Candidate::fit_resolution(std::size_t i, double fit) const {
   // A relative resolution of the limit is the same relative resolution of 1 / limit.
-  return inverse[i] ? kLimitResolution * std::abs(fit) : resolution[i];
+  return inverse[i] ? kLimitResolution * std::abs(fit)
+                    : std::hypot(resolution[i], relative_resolution[i] * std::abs(fit));
 }
 
 double Candidate::sigma(std::size_t i, double fit, double fit_sigma) const {
-  if (!inverse[i]) return std::hypot(fit_sigma, resolution[i]);
+  if (!inverse[i]) return std::hypot(fit_sigma, fit_resolution(i, fit));
   if (!(fit > 1e-12)) return std::numeric_limits<double>::infinity();
   const double limit = 1.0 / fit;
   return std::hypot(fit_sigma / (fit * fit), kLimitResolution * limit);
@@ -146,6 +150,7 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
       c.inverse.push_back(0);
       const bool lag = e.name == "actuator_lag" || e.name == "steering_lag";
       c.resolution.push_back(lag ? row_period_s / std::sqrt(12.0) : 0.0);
+      c.relative_resolution.push_back(e.name == "sensor_latency" ? kLatencyResolution : 0.0);
     }
     out.push_back(std::move(c));
   }

@@ -596,9 +596,11 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     result.augmented = eval.model_with(selected, final.fit.values);
     std::string zs;
     for (const FittedEffect& fe : result.named) zs += (zs.empty() ? "" : ", ") + fmt(fe.z, 3);
+    std::string sizes;
+    for (double v : s.size) sizes += (sizes.empty() ? "" : ", ") + fmt(v, 3);
     result.summary = "Named " + s.label() + " (" + title + "): significant at " + zs +
-                     " sigma; it removes " + fmt(100.0 * s.explained, 3) +
-                     " % of the residual, and what remains shows no pattern.";
+                     " sigma, an RMS change of " + sizes +
+                     " noise sigmas; what remains shows no pattern.";
   }
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;

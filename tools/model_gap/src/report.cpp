@@ -299,7 +299,7 @@ std::string markdown(const GapResult& r, bool plots) {
     md << (p ? ", " : "") << phase_name(static_cast<PhaseKind>(p)) << " " << fmt(durations[p], 4) << " s";
   }
   md << ".\n\nSelection: per question, the single effect with the lowest BIC among those significant at "
-     << fmt(r.options.question.min_z_name, 3) << " sigma or more (Wald test with an autocorrelation-robust covariance over "
+     << fmt(r.options.question.min_z_name, 3) << " sigma or more (likelihood-ratio test, widened for the residuals' autocorrelation over "
      << fmt(r.options.window_s, 3) << " s windows), then a second one when it is significant in the pair and "
         "lowers the BIC further. Workflow time "
      << fmt(r.wall_time_s, 3) << " s.\n";

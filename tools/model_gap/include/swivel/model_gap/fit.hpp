@@ -93,7 +93,8 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
                                         std::size_t window_count, std::vector<char>& observable);
 
 /// Significance of a chi-square statistic with `dof` degrees of freedom as the equivalent
-/// normal deviate (Wilson-Hilferty): about 1 for a statistic at its mean, 5 for a one-in-
+/// normal deviate (from the exact upper tail, the regularized incomplete gamma function):
+/// about 1 for a statistic at its mean, 5 for a one-in-
 /// three-million event.
 double chi_square_z(double chi2, double dof);
 

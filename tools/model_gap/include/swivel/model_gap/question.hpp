@@ -9,8 +9,9 @@
 //   unexplained residual  a misfit test fires: something the library does not hold
 //                         remains, and nothing is named (a library effect that fits part
 //                         of it would be a wrong name).
-// Significance is a Wald test against the nominal model's own values with the
-// autocorrelation-robust covariance of fit.hpp, expressed as a normal deviate.
+// Significance is a likelihood-ratio test of each effect against the fit without it,
+// widened by how much the residuals' autocorrelation widens its parameters (the sandwich
+// covariance of fit.hpp), expressed as a normal deviate.
 
 #include <functional>
 #include <string>
