@@ -10,7 +10,13 @@
 //
 // swpc rows carry steer_1..steer_N then wheel_1..wheel_N in place of wheel_l, wheel_r.
 // The truth columns (motion capture) are empty where a row has no sample. The command
-// columns hold the twist commanded from that row's time until the next row.
+// columns are the twist commanded at that row's time: a sample of a signal that may change
+// between rows (the daemon writes the latest control cycle's command at its record rate), not
+// a value held until the next row. A reader that needs the commands between rows reconstructs
+// them; the model-gap replay (tools/model_gap/src/command_replay.cpp) takes each row's value
+// as holding from halfway to the row before to halfway to the row after, fits one timing
+// offset of up to a row for the whole run, and counts what the unknown instant of each change
+// within its row leaves as noise.
 //
 // Neither the writer nor the reader is real-time safe (they allocate and do I/O); the
 // daemon hands RunLogSample values (trivially copyable) to a writer thread.
@@ -53,7 +59,7 @@ struct RunLogHeader {
 /// wheel, and steer_rad is unused.
 struct RunLogSample {
   double t_s = 0.0;
-  Twist2 cmd;                                   ///< commanded body twist
+  Twist2 cmd;                                   ///< body twist commanded at t_s (a sample)
   std::array<double, kMaxModules> wheel_rad{};  ///< cumulative encoder angles
   std::array<double, kMaxModules> steer_rad{};  ///< measured steering angles (swpc)
   double gyro_wz_radps = 0.0;
