@@ -70,7 +70,7 @@ std::array<double, kMaxModules> aligned_steer_angles(const PlantParams& plant,
 std::array<double, kMaxModules> calibration_steer_angles(const PlantParams& plant,
                                                          const CalibrationMotion& motion) noexcept;
 
-/// A run-log row from one reading and the twist commanded from then on.
+/// A run-log row from one reading and the twist commanded at its time (run_log.hpp).
 RunLogSample make_run_log_sample(const HardwareState& reading, const Twist2& commanded) noexcept;
 
 }  // namespace swivel::sim
