@@ -2,9 +2,11 @@
 //
 // A server process runs the DdsBridge over a synthetic 1 kHz loop (each snapshot stamped
 // with CLOCK_MONOTONIC at its cycle) and echoes pings; this process measures
-//   age   = client receive time - snapshot stamp   (publish-rate sampling included)
-//   floor = one-way DDS latency, half the round trip of a ping-pong with the same QoS
-// and prints p50/p99 of both, with the target: age p99 <= publish period + 2 * floor p99.
+//   age   = client receive time - snapshot stamp
+//   floor = one-way DDS latency, half the round trip of a ping-pong with the same QoS, one
+//           ping per publish period (the cadence of the state)
+// and prints p50/p99 of both, with the target: age p99 <= floor p99 + 150 us (the bridge
+// publishes each sample right after the loop cycle that made it: one DDS hop).
 
 #include <CLI/CLI.hpp>
 #include <signal.h>
@@ -100,6 +102,8 @@ int run_server(const std::string& robot, double rate_hz) {
   return 0;
 }
 
+constexpr double kAllowanceUs = 150.0;
+
 int run_client(const std::string& robot, double rate_hz, double seconds, int pings) {
   const pid_t child = fork();
   if (child == 0) {
@@ -153,49 +157,65 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   }
   const dds_entity_t pong_ws = dds_create_waitset(pp.handle());
   dds_waitset_attach(pong_ws, dds_create_readcondition(pong, DDS_ANY_STATE), 0);
-  std::vector<double> one_way_us;
   std::string id = "bench";
   swivel_msg_VelocityCommand msg{};
   msg.robot_id = id.data();
-  for (int i = 0; i < pings + 50; ++i) {
-    msg.sequence_number = static_cast<std::uint64_t>(i);
-    msg.stamp_s = monotonic_now_s();
-    dds_write(ping, &msg);
-    bool got = false;
-    while (!got) {
-      if (dds_waitset_wait(pong_ws, nullptr, 0, DDS_SECS(2)) <= 0) break;
-      void* samples[4] = {nullptr};
-      dds_sample_info_t infos[4];
-      const dds_return_t n = dds_take(pong, samples, infos, 4, 4);
-      const double now = monotonic_now_s();
-      for (dds_return_t k = 0; k < n; ++k) {
-        const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
-        if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {
-          got = true;
-          if (i >= 50) one_way_us.push_back(0.5e6 * (now - p->stamp_s));  // skip warm-up
+  std::uint64_t sequence = 0;
+  // One-way latencies of `count` pings (after 50 for warm-up), `gap_s` apart.
+  const auto ping_pong = [&](int count, double gap_s, std::vector<double>& one_way_us) {
+    for (int i = 0; i < count + 50; ++i) {
+      msg.sequence_number = ++sequence;
+      msg.stamp_s = monotonic_now_s();
+      dds_write(ping, &msg);
+      bool got = false;
+      while (!got) {
+        if (dds_waitset_wait(pong_ws, nullptr, 0, DDS_SECS(2)) <= 0) break;
+        void* samples[4] = {nullptr};
+        dds_sample_info_t infos[4];
+        const dds_return_t n = dds_take(pong, samples, infos, 4, 4);
+        const double now = monotonic_now_s();
+        for (dds_return_t k = 0; k < n; ++k) {
+          const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
+          if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {
+            got = true;
+            if (i >= 50) one_way_us.push_back(0.5e6 * (now - p->stamp_s));
+          }
         }
+        if (n > 0) dds_return_loan(pong, samples, n);
       }
-      if (n > 0) dds_return_loan(pong, samples, n);
+      if (!got) {
+        std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", i);
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::duration<double>(gap_s));
     }
-    if (!got) {
-      std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", i);
-      return finish(1);
-    }
-    std::this_thread::sleep_for(std::chrono::microseconds(500));
+    return true;
+  };
+  // The floor at the state's own cadence: a sample every publish period finds the client and
+  // Cyclone's receive thread asleep, which back-to-back pings (0.5 ms apart, printed too)
+  // do not pay.
+  std::vector<double> one_way_us;
+  std::vector<double> warm_us;
+  if (!ping_pong(pings, 1.0 / rate_hz, one_way_us) || !ping_pong(1000, 0.0005, warm_us)) {
+    return finish(1);
   }
 
-  const double period_us = 1e6 / rate_hz;
   const double age_p50 = percentile(ages_us, 0.50), age_p99 = percentile(ages_us, 0.99);
   const double floor_p50 = percentile(one_way_us, 0.50), floor_p99 = percentile(one_way_us, 0.99);
-  const double target_us = period_us + 2.0 * floor_p99;
+  // One DDS hop after the loop: the floor plus what the publisher may add (the loop
+  // cycle's own work and the publisher's wake-up).
+  const double target_us = floor_p99 + kAllowanceUs;
   std::printf("state age at client (%zu samples at %.0f Hz, 1 kHz synthetic loop): "
               "p50 %.1f us  p99 %.1f us  max %.1f us\n",
               ages_us.size(), rate_hz, age_p50, age_p99, percentile(ages_us, 1.0));
-  std::printf("DDS floor, one-way (ping-pong RTT/2, %zu round trips, same QoS):     "
+  std::printf("DDS floor, one-way (ping-pong RTT/2, %zu round trips at %.0f Hz, same QoS): "
               "p50 %.1f us  p99 %.1f us\n",
-              one_way_us.size(), floor_p50, floor_p99);
-  std::printf("target: age p99 <= period %.0f us + 2 x floor p99 = %.1f us: %s\n", period_us,
-              target_us, age_p99 <= target_us ? "met" : "NOT met");
+              one_way_us.size(), rate_hz, floor_p50, floor_p99);
+  std::printf("  (back-to-back, %zu round trips 0.5 ms apart: p50 %.1f us  p99 %.1f us)\n",
+              warm_us.size(), percentile(warm_us, 0.50), percentile(warm_us, 0.99));
+  std::printf("target: age p99 <= floor p99 + %.0f us = %.1f us: %s (age p99 - floor p99 = %.1f us)\n",
+              kAllowanceUs, target_us, age_p99 <= target_us ? "met" : "NOT met",
+              age_p99 - floor_p99);
   return finish(age_p99 <= target_us ? 0 : 3);
 }
 
@@ -211,7 +231,7 @@ int main(int argc, char** argv) {
   bool server = false;
   std::string robot = "bench_" + std::to_string(getpid());
   double rate_hz = 100.0, seconds = 5.0;
-  int pings = 1000;
+  int pings = 500;
   app.add_flag("--server", server, "run the publishing side (started by the benchmark)");
   app.add_option("--robot", robot, "robot id of the synthetic daemon");
   app.add_option("--rate-hz", rate_hz, "publish rate, Hz")->capture_default_str();

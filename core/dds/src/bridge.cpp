@@ -1,6 +1,7 @@
 #include "swivel/dds/bridge.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sys/prctl.h>
 #include <time.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <limits>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "ros2_interfaces.h"
 #include "swivel.h"
@@ -200,40 +202,97 @@ BridgeCounters DdsBridge::counters() const {
   return c;
 }
 
+namespace {
+
+using PublishClock = std::chrono::steady_clock;  // CLOCK_MONOTONIC on Linux, like stamp_s
+
+PublishClock::time_point at_monotonic(double stamp_s) {
+  return PublishClock::time_point(std::chrono::duration_cast<PublishClock::duration>(
+      std::chrono::duration<double>(stamp_s)));
+}
+
+// The publisher follows the loop's phase. It sleeps until kEarly before the cycle it is to
+// publish begins, then polls the snapshot (yielding between looks, for at most kSpin) and
+// sends that cycle's state as soon as the loop has written it: a sample leaves the
+// loop's cycle work plus one DDS hop after its stamp, not up to a publish period later.
+// Polling costs the publisher about kEarly plus one cycle's work per sample; the loop
+// does nothing for it. A cycle that does not come within kSpin (a stalled loop, or one
+// slower than the publish rate) is waited for in steps of kRetry; after kMaxWait the newest
+// snapshot goes out and the schedule restarts from it.
+constexpr auto kEarly = std::chrono::microseconds(150);
+constexpr auto kSpin = std::chrono::microseconds(1000);
+constexpr auto kRetry = std::chrono::microseconds(100);
+constexpr auto kMaxWait = std::chrono::milliseconds(5);
+
+}  // namespace
+
 void DdsBridge::publish_loop(const std::stop_token& stop) {
-  using Clock = std::chrono::steady_clock;  // CLOCK_MONOTONIC on Linux
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(1.0 / options_.publish_rate_hz));
-  const auto diagnostics_period = std::chrono::duration_cast<Clock::duration>(
+  // The default 50 us timer slack would be most of the age this schedule saves.
+  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  const double period_s = 1.0 / options_.publish_rate_hz;
+  const auto period = std::chrono::duration_cast<PublishClock::duration>(
+      std::chrono::duration<double>(period_s));
+  const auto diagnostics_period = std::chrono::duration_cast<PublishClock::duration>(
       std::chrono::duration<double>(1.0 / options_.diagnostics_rate_hz));
-  auto next = Clock::now();
-  auto next_diagnostics = next;
+  auto next_diagnostics = PublishClock::now();
   std::uint64_t last_cycle = 0;
   bool have_last = false;
+  double due_stamp_s = 0.0;  // the next cycle to publish is the first stamped from here
+  PublishClock::time_point due_at{};  // when it is due (epoch: any new cycle is)
   bool warned = false;
   StateSnapshot snapshot;
 
+  // A new cycle (true) and whether it is the one due; the loop's wake-up jitter in the
+  // stamps is tolerated up to 1 % of the publish period.
+  const auto look = [&](bool& due) {
+    const bool fresh =
+        callbacks_.read_state(snapshot) && (!have_last || snapshot.cycle != last_cycle);
+    due = fresh && snapshot.stamp_s >= due_stamp_s - 0.01 * period_s;
+    return fresh;
+  };
+
   std::unique_lock lock(dds_->wake_mutex);
   while (!stop.stop_requested()) {
+    auto next = PublishClock::now() + kRetry;
     try {
-      // Publish only new cycles: a stalled loop shows as a gap, not as repeated samples.
-      if (callbacks_.read_state(snapshot) && (!have_last || snapshot.cycle != last_cycle)) {
+      bool due = false;
+      bool fresh = look(due);
+      const auto spin_until = std::min(PublishClock::now(), due_at) + kSpin;
+      while (!due && have_last && PublishClock::now() < spin_until && !stop.stop_requested()) {
+        std::this_thread::yield();
+        fresh = look(due);
+      }
+      const auto now = PublishClock::now();
+      if (due || (fresh && now >= due_at + kMaxWait)) {
+        // Publish only new cycles: a stalled loop shows as a gap, not as repeated samples.
         publish_state(snapshot);
         last_cycle = snapshot.cycle;
         have_last = true;
+        due_stamp_s = snapshot.stamp_s + period_s;
+        due_at = at_monotonic(due_stamp_s);
+        next = due_at - kEarly;
+        // After a long stall the snapshot is old: restart the schedule from now.
+        if (due_at < now) {
+          due_at = now + period;
+          due_stamp_s = 0.0;
+          next = due_at;
+        }
+      } else if (now >= due_at + kMaxWait) {
+        // Nothing new for a while (a stalled or stopped loop): look once a period.
+        next = now + period;
       }
-      if (callbacks_.read_diagnostics && Clock::now() >= next_diagnostics) {
+      if (callbacks_.read_diagnostics && PublishClock::now() >= next_diagnostics) {
         publish_diagnostics(callbacks_.read_diagnostics());
         next_diagnostics += diagnostics_period;
-        if (next_diagnostics < Clock::now()) next_diagnostics = Clock::now() + diagnostics_period;
+        if (next_diagnostics < PublishClock::now()) {
+          next_diagnostics = PublishClock::now() + diagnostics_period;
+        }
       }
     } catch (const std::exception& e) {
       if (!warned) spdlog::warn("dds: publishing failed: {}", e.what());
       warned = true;
     }
-    next += period;
-    // After a long stall, restart the schedule instead of bursting to catch up.
-    if (next < Clock::now()) next = Clock::now() + period;
+    if (callbacks_.read_diagnostics && next_diagnostics < next) next = next_diagnostics;
     dds_->wake.wait_until(lock, stop, next, [] { return false; });
   }
 }
