@@ -1,5 +1,6 @@
 # Helpers shared by every folder: warnings, plugins and tests are declared the same way
 # everywhere.
+include(${CMAKE_CURRENT_LIST_DIR}/SwivelPluginHelpers.cmake)
 
 function(swivel_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion
@@ -22,12 +23,11 @@ endfunction()
 #   swivel_add_plugin(KIND NAME SOURCES ... [DEPS ...])
 function(swivel_add_plugin kind name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
-  set(target swivel_${kind}_${name})
+  swivel_plugin_target_name(target ${kind} ${name})
   add_library(${target} MODULE ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE swivel::plugin_api ${ARG_DEPS})
-  set_target_properties(${target} PROPERTIES PREFIX "" LIBRARY_OUTPUT_DIRECTORY
-                                             ${SWIVEL_PLUGIN_BUILD_DIR}
-                                             CXX_VISIBILITY_PRESET hidden)
+  swivel_plugin_target_properties(${target})
+  set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${SWIVEL_PLUGIN_BUILD_DIR})
   swivel_warnings(${target})
   install(TARGETS ${target} LIBRARY DESTINATION ${SWIVEL_PLUGIN_INSTALL_DIR})
   set_property(GLOBAL APPEND PROPERTY SWIVEL_PLUGIN_TARGETS ${target})
@@ -37,6 +37,12 @@ endfunction()
 #   swivel_add_test(NAME SOURCES ... [DEPS ...] [LABELS ...] [TIMEOUT s])
 function(swivel_add_test name)
   cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  if(NOT SWIVEL_HAVE_GTEST)
+    # Without GoogleTest the target exists (folders may set its properties) but is neither
+    # built nor registered.
+    add_executable(${name} EXCLUDE_FROM_ALL ${ARG_SOURCES})
+    return()
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
