@@ -95,7 +95,7 @@ TEST(PluginLoader, NotFoundListsEveryDirectorySearched) {
 
 TEST(PluginLoader, RefusesWrongAbiVersion) {
   EXPECT_EQ(error_of("bad_abi"),
-            file_of("bad_abi") + ": ABI version 999, expected 2 (built for a newer Swivel: "
+            file_of("bad_abi") + ": ABI version 999, expected 3 (built for a newer Swivel: "
                                  "rebuild the plugin against this one's headers)");
 }
 
@@ -108,9 +108,33 @@ TEST(PluginLoader, RefusesHardwarePluginOfTheAbiBeforeTheLifecycleHooks) {
     FAIL() << "no error";
   } catch (const PluginError& e) {
     EXPECT_EQ(std::string(e.what()),
-              kDir + "/swivel_hardware_old_abi.so: ABI version 1, expected 2 (built for an "
+              kDir + "/swivel_hardware_old_abi.so: ABI version 1, expected 3 (built for an "
                      "older Swivel: rebuild the plugin against this one's headers)");
   }
+}
+
+// The right version number but a type that crossed the boundary has another layout: the
+// plugin would read and write past the host's structures.
+TEST(PluginLoader, RefusesAPluginBuiltWithAnotherLayoutAndNamesTheType) {
+  EXPECT_EQ(error_of("layout_mismatch"),
+            file_of("layout_mismatch") +
+                ": built with another layout of the plugin ABI: layout of HardwareState "
+                "differs: " + std::to_string(sizeof(HardwareState) + 8) + " bytes, alignment " +
+                std::to_string(alignof(HardwareState)) + " in the plugin; " +
+                std::to_string(sizeof(HardwareState)) + " bytes, alignment " +
+                std::to_string(alignof(HardwareState)) +
+                " here (rebuild the plugin against this Swivel's headers, with the same "
+                "compiler)");
+  EXPECT_FALSE(is_loaded(file_of("layout_mismatch")));
+}
+
+TEST(PluginLoader, RefusesAPluginOfAnotherCxxAbi) {
+  const std::string message = error_of("cxx_abi_mismatch");
+  EXPECT_NE(message.find(file_of("cxx_abi_mismatch") + ": built with another layout"),
+            std::string::npos) << message;
+  EXPECT_NE(message.find("C++ ABI " + std::to_string(__GXX_ABI_VERSION + 1) +
+                         " in the plugin, " + std::to_string(__GXX_ABI_VERSION) + " here"),
+            std::string::npos) << message;
 }
 
 TEST(PluginLoader, RefusesWrongKind) {

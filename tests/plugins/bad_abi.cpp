@@ -8,6 +8,7 @@ swivel_plugin_descriptor(void) {
       [](const char** /*error*/) -> void* {
         return static_cast<swivel::Localization*>(new swivel::test_plugins::TestLocalization());
       },
-      [](void* instance) { delete static_cast<swivel::Localization*>(instance); }};
+      [](void* instance) { delete static_cast<swivel::Localization*>(instance); },
+      swivel::abi_fingerprint()};
   return &descriptor;
 }

@@ -9,6 +9,7 @@ swivel_plugin_descriptor(void) {
         *error = "must never be called";
         return nullptr;
       },
-      [](void* /*instance*/) {}};
+      [](void* /*instance*/) {},
+      swivel::abi_fingerprint()};
   return &descriptor;
 }

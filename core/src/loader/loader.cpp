@@ -10,6 +10,8 @@
 
 #include "swivel/plugin_loader.hpp"
 
+#include "swivel/plugin/abi_fingerprint.hpp"
+
 #ifndef SWIVEL_PLUGIN_INSTALL_DIR
 #define SWIVEL_PLUGIN_INSTALL_DIR "/usr/local/lib/swivel/plugins"
 #endif
@@ -152,6 +154,11 @@ std::shared_ptr<PluginLibrary> PluginLoader::open_file(std::uint32_t kind,
     throw PluginError(file + ": ABI version " + std::to_string(d->abi_version) + ", expected " +
                       std::to_string(SWIVEL_PLUGIN_ABI_VERSION) + " (built for " + which +
                       " Swivel: rebuild the plugin against this one's headers)");
+  }
+  if (const std::string differs = abi_fingerprint_difference(d->fingerprint); !differs.empty()) {
+    throw PluginError(file + ": built with another layout of the plugin ABI: " + differs +
+                      " (rebuild the plugin against this Swivel's headers, with the same "
+                      "compiler)");
   }
   if (d->kind != kind) {
     throw PluginError(file + ": kind '" + plugin_kind_name(d->kind) + "', expected '" +

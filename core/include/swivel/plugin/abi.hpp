@@ -7,11 +7,15 @@
 // The one C entry point every plugin library exports. The host dlopen()s a library, looks
 // up `swivel_plugin_descriptor`, and checks abi_version (first field, always) and kind
 // before calling anything else. Bump SWIVEL_PLUGIN_ABI_VERSION whenever a plugin interface
-// or a type in swivel/types.hpp changes layout.
+// changes. What a version number cannot catch (a type that crossed the boundary changed
+// size, a plugin built with another C++ ABI) the descriptor's fingerprint does: the size and
+// alignment of every type that crosses the boundary and the compiler's C++ ABI, as the
+// plugin was compiled (abi_fingerprint.hpp); the loader compares them with its own.
 //
 // ABI versions:
 //   1  the first plugin interfaces
 //   2  Hardware gains the lifecycle hooks activate(), deactivate() and on_error()
+//   3  the descriptor carries the layout fingerprint
 
 #include <array>
 #include <cstdint>
@@ -20,7 +24,7 @@
 
 extern "C" {
 
-#define SWIVEL_PLUGIN_ABI_VERSION 2u
+#define SWIVEL_PLUGIN_ABI_VERSION 3u
 #define SWIVEL_PLUGIN_ENTRY_POINT "swivel_plugin_descriptor"
 
 enum SwivelPluginKind : std::uint32_t {
@@ -28,6 +32,21 @@ enum SwivelPluginKind : std::uint32_t {
   SWIVEL_PLUGIN_DRIVETRAIN = 2,
   SWIVEL_PLUGIN_LOCALIZATION = 3,
   SWIVEL_PLUGIN_CALIBRATION = 4,
+};
+
+/// Size and alignment of one type that crosses the plugin boundary.
+struct SwivelAbiLayout {
+  const char* type;  ///< e.g. "HardwareState"
+  std::uint32_t size;
+  std::uint32_t align;
+};
+
+/// How the plugin was compiled, as far as the host can check it (ABI 3 on).
+struct SwivelAbiFingerprint {
+  std::uint32_t cxx_abi_version;   ///< __GXX_ABI_VERSION (Itanium C++ ABI revision)
+  std::uint32_t cxx11_string_abi;  ///< _GLIBCXX_USE_CXX11_ABI: std::string's layout
+  std::uint32_t layout_count;
+  const SwivelAbiLayout* layouts;
 };
 
 struct SwivelPluginDescriptor {
@@ -39,6 +58,8 @@ struct SwivelPluginDescriptor {
   void* (*create)(const char** error);
   /// Destroys an instance returned by create. Never throws.
   void (*destroy)(void* instance);
+  /// The plugin's compile-time fingerprint (swivel::abi_fingerprint()); ABI 3 on.
+  const SwivelAbiFingerprint* fingerprint;
 };
 
 typedef const SwivelPluginDescriptor* (*SwivelPluginEntryPoint)(void);
@@ -81,7 +102,9 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
 }
 }  // namespace swivel
 
-/// Exports `Class` (derived from `Interface`) as plugin `name`. Use once per library:
+/// Exports `Class` (derived from `Interface`) as plugin `name`, with the fingerprint of the
+/// types as this translation unit sees them (include the interface's header, which brings
+/// swivel/plugin/abi_fingerprint.hpp). Use once per library:
 ///   SWIVEL_EXPORT_PLUGIN(swivel::plugins::DifferentialDrivetrain, swivel::Drivetrain,
 ///                        "differential")
 #define SWIVEL_EXPORT_PLUGIN(Class, Interface, plugin_name)                                   \
@@ -101,6 +124,7 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
           }                                                                                 \
           return nullptr;                                                                   \
         },                                                                                  \
-        [](void* instance) { delete static_cast<Interface*>(instance); }};                  \
+        [](void* instance) { delete static_cast<Interface*>(instance); },                   \
+        ::swivel::abi_fingerprint()};                                                       \
     return &descriptor;                                                                     \
   }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "swivel/plugin/abi.hpp"
+#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/robot_model.hpp"
 #include "swivel/types.hpp"

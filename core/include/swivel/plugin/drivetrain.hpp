@@ -4,6 +4,7 @@
 #include <span>
 
 #include "swivel/plugin/abi.hpp"
+#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 

@@ -30,6 +30,7 @@
 // enable sequence); read(), write() and on_error() are real-time methods.
 
 #include "swivel/plugin/abi.hpp"
+#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 

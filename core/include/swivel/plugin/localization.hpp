@@ -3,6 +3,7 @@
 // source provides them, absolute pose fixes (HardwareState::motion_capture).
 
 #include "swivel/plugin/abi.hpp"
+#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 
