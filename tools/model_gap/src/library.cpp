@@ -11,9 +11,11 @@ namespace swivel::model_gap {
 namespace {
 
 // What the replay resolves of a fitted limit, relative: it applies the limiter per sub-step
-// (5 ms on a four-caster robot) where the robot does per control cycle, which moves a
-// ramp's ends by up to half a sub-step.
-constexpr double kLimitResolution = 0.01;
+// (5 ms on a four-caster robot) where the robot does per control cycle, which places a
+// ramp's end anywhere within a sub-step: h / sqrt(12) over a ramp of about half a second
+// is 0.3 % of its duration, and of the limit (on the independent battery the fitted limits
+// are 0.0-0.6 % off).
+constexpr double kLimitResolution = 0.003;
 // Candidate::relative_resolution of a sensor latency.
 constexpr double kLatencyResolution = 0.005;
 

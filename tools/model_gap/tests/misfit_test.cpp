@@ -94,5 +94,25 @@ TEST(Misfit, ATrendAndAJumpAreFound) {
   }
 }
 
+// A transient the replay places a little later than the run moves residual from one window
+// into the next: the pair cancels and is not a jump. The same two values in windows apart
+// (say, dropped encoder counts twice) are.
+TEST(Misfit, ATransientSplitAcrossTwoWindowsIsNotAJump) {
+  MisfitInputs split = noise_only(10);
+  split.residuals[0 * kWindows + 30] += 14.0;
+  split.residuals[0 * kWindows + 31] -= 14.0;
+  EXPECT_LT(z_of(misfit_tests(split), "jumps", "dx"), 5.0);
+
+  MisfitInputs apart = noise_only(10);
+  apart.residuals[0 * kWindows + 30] += 14.0;
+  apart.residuals[0 * kWindows + 50] -= 14.0;
+  EXPECT_GT(z_of(misfit_tests(apart), "jumps", "dx"), 5.0);
+
+  MisfitInputs same_sign = noise_only(10);
+  same_sign.residuals[0 * kWindows + 30] += 14.0;
+  same_sign.residuals[0 * kWindows + 31] += 14.0;
+  EXPECT_GT(z_of(misfit_tests(same_sign), "jumps", "dx"), 5.0);
+}
+
 }  // namespace
 }  // namespace swivel::model_gap

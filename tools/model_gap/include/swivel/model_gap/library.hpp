@@ -37,7 +37,7 @@ struct Candidate {
   /// Per parameter, in model units: what the replay cannot resolve, added in quadrature to
   /// the statistical uncertainty (0: nothing). A lag trades against when in its row the log
   /// caught each command (a row period over sqrt 12); a limit against the replay's sub-step
-  /// (about 1 % of the limit).
+  /// (0.3 % of the limit).
   std::vector<double> resolution;
   /// Per parameter, as a fraction of the fitted value, added like `resolution`. A sensor
   /// latency: 0.5 %. The anchors' local path shape comes from the nominal (undelayed) dead
