@@ -171,6 +171,7 @@ Parser::Result Parser::feed(std::span<const std::uint8_t> data, std::size_t& con
 
 Parser::Result Parser::finish_packet() noexcept {
   size_ = 0;
+  last_id_ = buffer_[4];
   const std::size_t crc_at = expected_ - 2;
   const std::uint16_t crc = crc16({buffer_.data(), crc_at});
   const auto received =

@@ -151,6 +151,9 @@ class Parser {
   /// them); `consumed` says how many. Call again with the rest.
   Result feed(std::span<const std::uint8_t> data, std::size_t& consumed) noexcept;
   [[nodiscard]] const Packet& packet() const noexcept { return packet_; }
+  /// The ID byte of the last complete packet, kCrcError ones included (a hint only: the
+  /// CRC did not vouch for it).
+  [[nodiscard]] std::uint8_t last_id() const noexcept { return last_id_; }
   void reset() noexcept { size_ = 0; }
 
  private:
@@ -159,6 +162,7 @@ class Parser {
   std::size_t size_ = 0;
   std::size_t expected_ = 0;  // total bytes of the current packet once the length is known
   Packet packet_{};
+  std::uint8_t last_id_ = 0;
 };
 
 /// Little-endian readers for status data.

@@ -1,0 +1,120 @@
+// swivel-dxl-emulator: a DYNAMIXEL X-series bus on a pseudo-terminal, for trying the
+// `dynamixel` hardware plugin without servos.
+//
+//   swivel-dxl-emulator --ids 1,2 [--baud 1000000] [--link PATH]
+//                       [--fault KIND:ID:START_S ...]
+//
+// Prints the device path (and makes PATH a symbolic link to it with --link), then serves
+// until SIGINT or SIGTERM and prints the Torque Enable writes it saw. Faults, from START_S
+// seconds after start: silence, crc (corrupt CRC), hwerror (overload bit), slow (20 ms replies).
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "swivel/dynamixel/bus.hpp"
+#include "swivel/dynamixel/emulator.hpp"
+
+namespace {
+
+volatile sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+struct Fault {
+  std::string kind;
+  std::uint8_t id = 0;
+  double start_s = 0.0;
+  bool applied = false;
+};
+
+int usage() {
+  std::fputs("usage: swivel-dxl-emulator --ids 1,2 [--baud N] [--link PATH] "
+             "[--fault silence|crc|hwerror|slow:ID:START_S ...]\n",
+             stderr);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  swivel::dynamixel::Emulator::Options options;
+  options.ids.clear();
+  std::string link;
+  std::vector<Fault> faults;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (i + 1 >= argc) return usage();
+    const std::string value = argv[++i];
+    if (arg == "--ids") {
+      for (std::size_t at = 0; at < value.size();) {
+        const std::size_t comma = value.find(',', at);
+        const std::string item = value.substr(at, comma - at);
+        const int id = std::atoi(item.c_str());
+        if (id < 0 || id > swivel::dynamixel::kMaxId) return usage();
+        options.ids.push_back(static_cast<std::uint8_t>(id));
+        at = comma == std::string::npos ? value.size() : comma + 1;
+      }
+    } else if (arg == "--baud") {
+      options.baud = static_cast<std::uint32_t>(std::strtoul(value.c_str(), nullptr, 10));
+    } else if (arg == "--link") {
+      link = value;
+    } else if (arg == "--fault") {
+      Fault f;
+      const std::size_t a = value.find(':');
+      const std::size_t b = a == std::string::npos ? a : value.find(':', a + 1);
+      if (b == std::string::npos) return usage();
+      f.kind = value.substr(0, a);
+      f.id = static_cast<std::uint8_t>(std::atoi(value.substr(a + 1, b - a - 1).c_str()));
+      f.start_s = std::atof(value.substr(b + 1).c_str());
+      if (f.kind != "silence" && f.kind != "crc" && f.kind != "hwerror" && f.kind != "slow") {
+        return usage();
+      }
+      faults.push_back(f);
+    } else {
+      return usage();
+    }
+  }
+  if (options.ids.empty()) return usage();
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  try {
+    swivel::dynamixel::Emulator emulator(options);
+    if (!link.empty()) {
+      std::filesystem::remove(link);
+      std::filesystem::create_symlink(emulator.port(), link);
+    }
+    std::printf("%s\n", emulator.port().c_str());
+    std::fflush(stdout);
+    const double start_s = swivel::dynamixel::monotonic_s();
+    while (g_stop == 0) {
+      usleep(10000);
+      const double t = swivel::dynamixel::monotonic_s() - start_s;
+      for (Fault& f : faults) {
+        if (f.applied || t < f.start_s) continue;
+        f.applied = true;
+        if (f.kind == "silence") emulator.set_silent(f.id, true);
+        if (f.kind == "crc") emulator.set_corrupt_crc(f.id, true);
+        if (f.kind == "hwerror") {
+          emulator.set_hardware_error(f.id, swivel::dynamixel::hardware_error::kOverload);
+        }
+        if (f.kind == "slow") emulator.set_reply_delay(f.id, 0.02);
+        std::fprintf(stderr, "fault %s on ID %u at %.2f s\n", f.kind.c_str(), f.id, t);
+      }
+    }
+    for (const auto& w : emulator.torque_writes()) {
+      std::printf("torque_enable id=%u value=%u t=%.3f\n", w.id, w.value, w.time_s - start_s);
+    }
+    if (!link.empty()) std::filesystem::remove(link);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-dxl-emulator: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
