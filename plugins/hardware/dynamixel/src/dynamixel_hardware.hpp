@@ -1,0 +1,136 @@
+#pragma once
+// The `dynamixel` hardware plugin: wheels (and SWPC steering) driven by DYNAMIXEL X-series
+// servos on one Protocol 2.0 bus. Configuration: README.md in this folder.
+//
+// A bus thread (started by activate(), joined by deactivate()) runs one bus cycle per
+// bus_period_s: a Sync Write of the goals (Goal Velocity of the wheel servos; Goal Position
+// of the steering servos, when there are any) and one Sync Read of Present Velocity and
+// Present Position of every servo; a status with the alert bit set is followed by a READ of
+// Hardware Error Status. read() and write() only exchange with that thread through lock-free
+// latest-value buffers.
+//
+// Faults (read() returns kError with a fixed message naming the servo; latched until a clear
+// re-activates): a status packet missing or later than reply_timeout_s; max_crc_errors
+// consecutive bad CRCs from one servo; a hardware error bit (with its meaning); an error
+// number in a status; no new reading from the bus thread for stale_timeout_s. From the
+// fault on, the bus thread commands zero wheel velocity and holds the steering itself.
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "swivel/dynamixel/bus.hpp"
+#include "swivel/dynamixel/serial_port.hpp"
+#include "swivel/plugin/hardware.hpp"
+#include "swivel/rt/latest_value.hpp"
+
+namespace swivel::plugins {
+
+class DynamixelHardware final : public Hardware {
+ public:
+  static constexpr std::size_t kMaxServos = 2 * kMaxModules;
+
+  enum class FaultKind : std::uint8_t {
+    kNone,
+    kSilent,
+    kCrcRun,
+    kHardwareError,
+    kStatusError,
+    kPort,
+  };
+  /// The hardware-error meanings a message exists for (hardware_error_text()).
+  static constexpr std::size_t kHardwareTexts = 6;
+
+  struct Servo {
+    std::uint8_t id = 0;
+    bool steering = false;        ///< extended position mode; else a wheel in velocity mode
+    std::uint32_t module = 0;
+    double direction = 1.0;       ///< +1 or -1: servo positive = output positive
+    double gear_ratio = 1.0;      ///< servo revolutions per output revolution
+    double zero_offset_rad = 0.0;  ///< output angle = servo angle / ratio - offset
+    std::string name;             ///< "left wheel", "module 2 steering"
+  };
+
+  /// What the bus thread publishes once per bus cycle.
+  struct Reading {
+    std::uint64_t cycle = 0;
+    double stamp_s = 0.0;  ///< CLOCK_MONOTONIC at the end of the Sync Read
+    std::array<std::int32_t, kMaxServos> position{};  ///< servo counts
+    std::array<std::int32_t, kMaxServos> velocity{};  ///< 0.229 rpm units
+    FaultKind fault = FaultKind::kNone;
+    std::uint8_t fault_servo = 0;
+    std::uint8_t hardware_error = 0;
+    std::uint64_t crc_errors = 0;  ///< bad status packets since activation
+    double cycle_busy_s = 0.0;     ///< Sync Write + Sync Read of this cycle
+  };
+
+  ~DynamixelHardware() override;
+
+  void configure(const PluginContext& ctx) override;
+  Status activate() override;
+  Status deactivate() override;
+  void on_error(const char* cause) noexcept override;
+  Status read(double stamp_s, HardwareState& out) noexcept override;
+  Status write(const ActuatorCommand& command) noexcept override;
+  [[nodiscard]] const char* last_error() const noexcept override { return last_error_; }
+
+  // For tests and benches.
+  [[nodiscard]] const std::vector<Servo>& servos() const noexcept { return servos_; }
+  [[nodiscard]] const Reading& last_reading() const noexcept { return reading_; }
+  [[nodiscard]] std::uint64_t bus_cycles() const noexcept {
+    return bus_cycles_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  void stop_thread() noexcept;
+  void bus_loop(Reading r) noexcept;  // starts from the activation reading
+  // Off the loop: a failed step of activate()/deactivate() names the servo; false then.
+  bool setup_servo(dynamixel::Bus& bus, std::size_t i);
+  [[nodiscard]] const char* message(FaultKind kind, std::size_t servo,
+                                    std::uint8_t hardware_error) const noexcept;
+  [[nodiscard]] std::int32_t wheel_goal(std::size_t i, double rate_radps) const noexcept;
+  [[nodiscard]] std::int32_t steer_goal(std::size_t i, double angle_rad) const noexcept;
+  [[nodiscard]] double output_angle(std::size_t i, std::int32_t counts) const noexcept;
+
+  // Configuration.
+  std::string port_path_;
+  std::uint32_t baud_ = 1000000;
+  double reply_timeout_s_ = 0.005;
+  double bus_period_s_ = 0.002;
+  double stale_timeout_s_ = 0.05;
+  std::uint32_t max_crc_errors_ = 3;
+  double loop_period_s_ = 0.001;
+  std::uint32_t module_count_ = 0;
+  std::vector<Servo> servos_;
+  std::vector<std::uint8_t> wheel_ids_, steer_ids_, all_ids_;
+  std::vector<std::size_t> wheel_index_, steer_index_;  // into servos_
+  std::array<std::int32_t, kMaxModules> wheel_servo_{};  // module -> servo index, -1 none
+  std::array<std::int32_t, kMaxModules> steer_servo_{};
+  // Messages, built by configure(): [servo][kind] and [servo][hardware text].
+  std::vector<std::array<std::string, 6>> messages_;
+  std::vector<std::array<std::string, kHardwareTexts>> hardware_messages_;
+  std::string activate_error_;  // activate()/deactivate() failures (off the loop)
+
+  // Bus thread.
+  dynamixel::SerialPort port_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> hold_{false};  // on_error(): zero goals until re-activated
+  std::atomic<std::uint64_t> bus_cycles_{0};
+  rt::LatestValue<ActuatorCommand> commands_;  // loop -> bus thread
+  rt::LatestValue<Reading> readings_;          // bus thread -> loop
+  std::array<double, kMaxModules> start_steer_rad_{};  // steering at activation
+
+  // Loop side.
+  Reading reading_{};
+  std::uint32_t cycles_without_reading_ = 0;
+  std::uint32_t stale_cycles_ = 50;
+  const char* last_error_ = "";
+};
+
+}  // namespace swivel::plugins

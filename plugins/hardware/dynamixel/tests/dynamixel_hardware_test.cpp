@@ -1,0 +1,346 @@
+// The dynamixel hardware plugin in-process against the emulated bus: configuration errors,
+// driving both robot kinds, each fault stopping the robot with the servo named, torque off
+// on deactivate, and read()/write() free of heap use.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <thread>
+
+#include "alloc_guard.hpp"
+#include "dynamixel_hardware.hpp"
+#include "swivel/config/config_error.hpp"
+#include "swivel/dynamixel/bus.hpp"
+#include "swivel/dynamixel/emulator.hpp"
+
+namespace dxl = swivel::dynamixel;
+using swivel::ActuatorCommand;
+using swivel::HardwareState;
+using swivel::ModuleDriveMode;
+using swivel::PluginContext;
+using swivel::RobotModel;
+using swivel::Status;
+using swivel::plugins::DynamixelHardware;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+RobotModel differential() {
+  RobotModel m;
+  m.drivetrain = swivel::DrivetrainKind::kDifferential;
+  return m;
+}
+
+RobotModel swpc(std::size_t modules) {
+  RobotModel m;
+  m.drivetrain = swivel::DrivetrainKind::kSwpc;
+  m.modules.resize(modules);
+  return m;
+}
+
+dxl::Emulator::Options ids(std::vector<std::uint8_t> list) {
+  dxl::Emulator::Options o;
+  o.ids = std::move(list);
+  return o;
+}
+
+void configure(DynamixelHardware& hw, const RobotModel& model, const std::string& yaml) {
+  PluginContext ctx;
+  ctx.params = YAML::Load(yaml);
+  ctx.config_file = "test.yaml";
+  ctx.params_path = "hardware.params";
+  ctx.robot = &model;
+  ctx.period_s = 0.001;
+  hw.configure(ctx);
+}
+
+std::string diff_params(const std::string& port, const std::string& extra = "") {
+  return "{port: " + port +
+         ", left: {id: 1}, right: {id: 2, direction: -1, gear_ratio: 2.0}" + extra + "}";
+}
+
+// Runs a 1 kHz read/write loop for `seconds` with `command`; returns the last status and
+// state (stops at the first kError).
+Status run(DynamixelHardware& hw, const ActuatorCommand& command, double seconds,
+           HardwareState& state) {
+  const auto start = std::chrono::steady_clock::now();
+  double t = 0.0;
+  while (t < seconds) {
+    t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (hw.read(t, state) != Status::kOk) return Status::kError;
+    if (hw.write(command) != Status::kOk) return Status::kError;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return Status::kOk;
+}
+
+ActuatorCommand wheels(double left, double right) {
+  ActuatorCommand c;
+  c.module_count = 2;
+  c.wheel_rate_radps[0] = left;
+  c.wheel_rate_radps[1] = right;
+  return c;
+}
+
+}  // namespace
+
+TEST(DynamixelHardware, RefusesBadParametersNamingTheKey) {
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  auto message = [&](const std::string& yaml) {
+    try {
+      configure(hw, model, yaml);
+    } catch (const swivel::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("{left: {id: 1}, right: {id: 2}}").find("port"), std::string::npos);
+  EXPECT_NE(message("{port: /dev/null, left: {id: 1}, right: {id: 1}}").find("used twice"),
+            std::string::npos);
+  EXPECT_NE(message("{port: /dev/null, left: {id: 1, direction: 0}, right: {id: 2}}")
+                .find("direction"),
+            std::string::npos);
+  EXPECT_NE(message("{port: /dev/null, left: {id: 1, zero_offset_rad: 1}, right: {id: 2}}")
+                .find("only to steering"),
+            std::string::npos);
+  EXPECT_NE(message("{port: /dev/null, left: {id: 1}, right: {id: 2}, bogus: 1}").find("bogus"),
+            std::string::npos);
+  const RobotModel four = swpc(4);
+  try {
+    configure(hw, four, "{port: /dev/null, modules: [{wheel: {id: 1}, steer: {id: 2}}]}");
+    ADD_FAILURE() << "accepted one module for four";
+  } catch (const swivel::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("expected 4 entries"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DynamixelHardware, ActivationNamesAMissingServoOrPort) {
+  dxl::Emulator emulator(ids({1}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_STREQ(hw.last_error(),
+               "dynamixel: servo ID 2 (right wheel): does not answer a ping");
+  DynamixelHardware no_port;
+  configure(no_port, model, diff_params("/nonexistent/ttyUSB9"));
+  EXPECT_EQ(no_port.activate(), Status::kError);
+  EXPECT_NE(std::string(no_port.last_error()).find("/nonexistent/ttyUSB9"), std::string::npos);
+}
+
+TEST(DynamixelHardware, DifferentialDrivesWithDirectionAndGearAndTorqueGoesOff) {
+  dxl::Emulator emulator(ids({1, 2}));
+  emulator.set_present_position(2, 4096);  // not at zero: angles are the servos' own
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.operating_mode(1), dxl::operating_mode::kVelocity);
+  EXPECT_EQ(emulator.torque_enable(1), 1);
+  EXPECT_EQ(emulator.torque_enable(2), 1);
+  HardwareState start;
+  ASSERT_EQ(run(hw, wheels(0.0, 0.0), 0.05, start), Status::kOk) << hw.last_error();
+  EXPECT_NEAR(start.wheel_angle_rad[1], -kPi, 1e-3);  // one servo turn back, 2:1
+
+  const auto t0 = std::chrono::steady_clock::now();
+  HardwareState end;
+  ASSERT_EQ(run(hw, wheels(2.0, 2.0), 0.5, end), Status::kOk) << hw.last_error();
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // 2 rad/s at the wheel: the right servo turns 4 rad/s backwards (2:1, mounted reversed).
+  const double units = 2.0 * 60.0 / (2.0 * kPi) / 0.229;
+  EXPECT_EQ(emulator.goal_velocity(1), std::lround(units));
+  EXPECT_EQ(emulator.goal_velocity(2), -std::lround(2.0 * units));
+  const double moved_left = end.wheel_angle_rad[0] - start.wheel_angle_rad[0];
+  const double moved_right = end.wheel_angle_rad[1] - start.wheel_angle_rad[1];
+  EXPECT_NEAR(moved_left, 2.0 * took, 0.15);
+  EXPECT_NEAR(moved_right, 2.0 * took, 0.15);
+  EXPECT_EQ(end.module_count, 2U);
+  EXPECT_FALSE(end.gyro_valid);
+  EXPECT_GT(hw.bus_cycles(), 100U);
+
+  ASSERT_EQ(hw.deactivate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.torque_enable(1), 0);
+  EXPECT_EQ(emulator.torque_enable(2), 0);
+  const auto writes = emulator.torque_writes();
+  ASSERT_GE(writes.size(), 4U);
+  EXPECT_EQ(writes.back().value, 0);
+  EXPECT_EQ(emulator.goal_velocity(1), 0);
+}
+
+TEST(DynamixelHardware, SwpcSteersInExtendedPositionAndDrivesWheels) {
+  dxl::Emulator emulator(ids({1, 11, 2, 12, 3, 13, 4, 14}));
+  const RobotModel model = swpc(4);
+  DynamixelHardware hw;
+  configure(hw, model,
+            "{port: " + emulator.port() +
+                ", modules: ["
+                "{wheel: {id: 1}, steer: {id: 11, zero_offset_rad: 0.5}},"
+                "{wheel: {id: 2}, steer: {id: 12, gear_ratio: 3}},"
+                "{wheel: {id: 3, direction: -1}, steer: {id: 13, direction: -1}},"
+                "{wheel: {id: 4}, steer: {id: 14}}]}");
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.operating_mode(11), dxl::operating_mode::kExtendedPosition);
+  EXPECT_EQ(emulator.operating_mode(1), dxl::operating_mode::kVelocity);
+  ActuatorCommand c;
+  c.module_count = 4;
+  for (std::size_t m = 0; m < 4; ++m) {
+    c.wheel_rate_radps[m] = 1.0;
+    c.steer_rate_radps[m] = 1.0;
+  }
+  HardwareState start;
+  ASSERT_EQ(run(hw, ActuatorCommand{4, {}, {}, {}}, 0.02, start), Status::kOk);
+  EXPECT_NEAR(start.steer_angle_rad[0], -0.5, 1e-3);  // servo at 0, offset 0.5
+  HardwareState end;
+  ASSERT_EQ(run(hw, c, 0.3, end), Status::kOk) << hw.last_error();
+  // Stop steering and let the position servos settle on their goals.
+  HardwareState settled;
+  ASSERT_EQ(run(hw, ActuatorCommand{4, {}, {}, {}}, 0.1, settled), Status::kOk);
+  for (std::size_t m = 0; m < 4; ++m) {
+    const double steered = settled.steer_angle_rad[m] - start.steer_angle_rad[m];
+    EXPECT_NEAR(steered, 0.3, 0.06) << "module " << m;
+    EXPECT_GT(settled.wheel_angle_rad[m] - start.wheel_angle_rad[m], 0.2) << "module " << m;
+  }
+  EXPECT_LT(emulator.goal_position(13), 0);  // reversed steering servo
+  EXPECT_GT(emulator.goal_position(12), 3 * emulator.goal_position(14) - 60);
+  // Locked: wheels stop, steering holds.
+  for (std::size_t m = 0; m < 4; ++m) c.mode[m] = ModuleDriveMode::kLocked;
+  ASSERT_EQ(run(hw, c, 0.05, end), Status::kOk);
+  EXPECT_EQ(emulator.goal_velocity(1), 0);
+  // Free steering is not a mode these servos do.
+  c.mode[0] = ModuleDriveMode::kFreeSteer;
+  EXPECT_EQ(hw.write(c), Status::kError);
+  ASSERT_EQ(hw.deactivate(), Status::kOk);
+  for (const std::uint8_t id : std::vector<std::uint8_t>{1, 11, 2, 12, 3, 13, 4, 14}) EXPECT_EQ(emulator.torque_enable(id), 0);
+}
+
+TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(3.0, 3.0), 0.1, s), Status::kOk);
+  EXPECT_NE(emulator.goal_velocity(1), 0);
+  emulator.set_silent(2, true);
+  ASSERT_EQ(run(hw, wheels(3.0, 3.0), 1.0, s), Status::kError);
+  EXPECT_STREQ(hw.last_error(),
+               "dynamixel: servo ID 2 (right wheel) not answering: status packet missing or "
+               "late");
+  hw.on_error(hw.last_error());
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  EXPECT_EQ(emulator.goal_velocity(1), 0) << "the bus thread stops the wheels itself";
+  // The fault stays until a clear; the clear names the servo while it is still silent.
+  EXPECT_EQ(hw.read(2.0, s), Status::kError);
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 2 (right wheel): does not answer a ping");
+  emulator.set_silent(2, false);
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(run(hw, wheels(0.0, 0.0), 0.05, s), Status::kOk) << hw.last_error();
+  hw.deactivate();
+}
+
+TEST(DynamixelHardware, LateRepliesAreAFaultNamingTheServo) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port(), ", reply_timeout_s: 0.004"));
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk);
+  emulator.set_reply_delay(1, 0.02);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  EXPECT_STREQ(hw.last_error(),
+               "dynamixel: servo ID 1 (left wheel) not answering: status packet missing or "
+               "late");
+  emulator.set_reply_delay(1, 0.0);
+  hw.deactivate();
+}
+
+TEST(DynamixelHardware, CrcErrorsAreCountedAndARunTrips) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  {
+    // A generous limit: the errors are counted, the robot keeps going.
+    DynamixelHardware hw;
+    configure(hw, model, diff_params(emulator.port(), ", max_crc_errors: 1000"));
+    ASSERT_EQ(hw.activate(), Status::kOk);
+    HardwareState s;
+    emulator.set_corrupt_crc(2, true);
+    ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk) << hw.last_error();
+    EXPECT_GT(hw.last_reading().crc_errors, 5U);
+    EXPECT_LT(hw.last_reading().crc_errors, 1000U);
+    emulator.set_corrupt_crc(2, false);
+    ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk) << hw.last_error();
+    hw.deactivate();
+  }
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port(), ", max_crc_errors: 3"));
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
+  emulator.set_corrupt_crc(2, true);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 2 (right wheel): 3 CRC errors in a row");
+  EXPECT_GE(hw.last_reading().crc_errors, 3U);
+  emulator.set_corrupt_crc(2, false);
+  hw.deactivate();
+}
+
+TEST(DynamixelHardware, HardwareErrorBitIsReportedWithItsMeaning) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
+  emulator.set_hardware_error(1, dxl::hardware_error::kOverload);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 1 (left wheel): hardware error: overload");
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_STREQ(hw.last_error(),
+               "dynamixel: servo ID 1 (left wheel): hardware error: overload (power-cycle or "
+               "reboot the servo)");
+  emulator.set_hardware_error(1, 0);
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  hw.deactivate();
+}
+
+TEST(DynamixelHardware, ReadAndWriteDoNotTouchTheHeap) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  HardwareState s;
+  const ActuatorCommand c = wheels(1.0, -1.0);
+  ASSERT_EQ(run(hw, c, 0.02, s), Status::kOk);
+  swivel::test::HeapCounts counts;
+  {
+    swivel::test::AllocCounter counter;
+    for (int i = 0; i < 300; ++i) {
+      (void)hw.read(1.0 + 0.001 * i, s);
+      (void)hw.write(c);
+      usleep(500);
+    }
+    emulator.set_silent(1, true);  // the fault path too
+    for (int i = 0; i < 300; ++i) {
+      (void)hw.read(2.0 + 0.001 * i, s);
+      (void)hw.write(c);
+      usleep(500);
+    }
+    counts = counter.counts();
+  }
+  EXPECT_EQ(hw.read(3.0, s), Status::kError);
+  EXPECT_EQ(counts.allocations, 0U);
+  EXPECT_EQ(counts.deallocations, 0U);
+  emulator.set_silent(1, false);
+  hw.deactivate();
+}
