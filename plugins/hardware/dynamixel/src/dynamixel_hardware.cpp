@@ -96,10 +96,10 @@ void DynamixelHardware::configure(const PluginContext& ctx) {
     for (std::size_t m = 0; m < list.size(); ++m) {
       ParamReader entry = params.element(list, "modules", m);
       char name[48];
-      std::snprintf(name, sizeof name, "module %zu wheel", m);
+      std::snprintf(name, sizeof name, "wheel %zu", m);
       ParamReader wheel = entry.child("wheel");
       servos.push_back(parse_servo(wheel, false, static_cast<std::uint32_t>(m), name));
-      std::snprintf(name, sizeof name, "module %zu steering", m);
+      std::snprintf(name, sizeof name, "steer %zu", m);
       ParamReader steer = entry.child("steer");
       servos.push_back(parse_servo(steer, true, static_cast<std::uint32_t>(m), name));
       entry.finish();
@@ -142,19 +142,17 @@ void DynamixelHardware::configure(const PluginContext& ctx) {
       wheel_servo_[s.module] = static_cast<std::int32_t>(i);
     }
     auto& m = messages_[i];
-    m[static_cast<std::size_t>(FaultKind::kSilent)] = format(
-        "dynamixel: servo ID %u (%s) not answering: status packet missing or late%s", s.id,
-        s.name, "");
+    m[static_cast<std::size_t>(FaultKind::kSilent)] =
+        format("dynamixel ID %u (%s): %s", s.id, s.name, "no status packet in time");
     char crc_text[48];
     std::snprintf(crc_text, sizeof crc_text, "%u CRC errors in a row", max_crc_errors_);
     m[static_cast<std::size_t>(FaultKind::kCrcRun)] =
-        format("dynamixel: servo ID %u (%s): %s", s.id, s.name, crc_text);
+        format("dynamixel ID %u (%s): %s", s.id, s.name, crc_text);
     m[static_cast<std::size_t>(FaultKind::kStatusError)] =
-        format("dynamixel: servo ID %u (%s): %s", s.id, s.name, "error in its status packet");
+        format("dynamixel ID %u (%s): %s", s.id, s.name, "error in status packet");
     for (std::size_t k = 0; k < kHardwareTextList.size(); ++k) {
       hardware_messages_[i][k] =
-          format("dynamixel: servo ID %u (%s): hardware error: %s", s.id, s.name,
-                 kHardwareTextList[k]);
+          format("dynamixel ID %u (%s): HW error: %s", s.id, s.name, kHardwareTextList[k]);
     }
   }
   last_error_ = "";
@@ -186,6 +184,14 @@ std::int32_t DynamixelHardware::steer_goal(std::size_t i, double angle_rad) cons
   return static_cast<std::int32_t>(std::llround(std::clamp(counts, -2e9, 2e9)));
 }
 
+double DynamixelHardware::angle_at(std::int32_t servo, double age_s) const noexcept {
+  if (servo < 0) return 0.0;
+  const auto i = static_cast<std::size_t>(servo);
+  const Servo& s = servos_[i];
+  const double rate_radps = s.direction * reading_.velocity[i] * kRadpsPerUnit / s.gear_ratio;
+  return output_angle(i, reading_.position[i]) + rate_radps * age_s;
+}
+
 double DynamixelHardware::output_angle(std::size_t i, std::int32_t counts) const noexcept {
   const Servo& s = servos_[i];
   const double angle = s.direction * counts * kRadPerCount / s.gear_ratio;
@@ -196,7 +202,7 @@ bool DynamixelHardware::setup_servo(dxl::Bus& bus, std::size_t i) {
   const Servo& s = servos_[i];
   std::uint8_t error = 0;
   auto fail = [&](const char* what) {
-    activate_error_ = format("dynamixel: servo ID %u (%s): %s", s.id, s.name, what);
+    activate_error_ = format("dynamixel ID %u (%s): %s", s.id, s.name, what);
     return false;
   };
   dxl::BusResult r = bus.ping(s.id, kSetupTimeout_s, error);
@@ -277,8 +283,8 @@ Status DynamixelHardware::activate() {
     const dxl::BusResult r =
         bus.write(s.id, dxl::address::kTorqueEnable, on, kSetupTimeout_s, error);
     if (r != dxl::BusResult::kOk || (error & 0x7F) != 0) {
-      activate_error_ = format("dynamixel: servo ID %u (%s): %s", s.id, s.name,
-                               "refuses to switch the torque on");
+      activate_error_ =
+          format("dynamixel ID %u (%s): %s", s.id, s.name, "refuses to switch the torque on");
       last_error_ = activate_error_.c_str();
       deactivate();
       last_error_ = activate_error_.c_str();
@@ -293,6 +299,7 @@ Status DynamixelHardware::activate() {
   zero.module_count = module_count_;
   commands_.publish(zero);
   reading_.stamp_s = dxl::monotonic_s();
+  reading_.sample_s = reading_.stamp_s;
   cycles_without_reading_ = 0;
   stop_.store(false, std::memory_order_release);
   thread_ = std::thread([this, initial = reading_] { bus_loop(initial); });
@@ -322,8 +329,8 @@ Status DynamixelHardware::deactivate() {
             dxl::BusResult::kOk ||
         torque[0] != 0) {
       if (status == Status::kOk) {
-        activate_error_ = format("dynamixel: servo ID %u (%s): %s", s.id, s.name,
-                                 "torque off not confirmed");
+        activate_error_ =
+            format("dynamixel ID %u (%s): %s", s.id, s.name, "torque off not confirmed");
         last_error_ = activate_error_.c_str();
       }
       status = Status::kError;
@@ -373,6 +380,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     }
     ok = ok && (steer_ids_.empty() || bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
                                                      {data.data(), 4 * steer_ids_.size()}));
+    const double sample_s = dxl::monotonic_s();
     ok = ok && bus.sync_read(dxl::address::kPresentVelocity, 8, ids, replies, reply_timeout_s_);
     if (!ok && r.fault == FaultKind::kNone) r.fault = FaultKind::kPort;
     for (std::size_t i = 0; ok && i < ids.size(); ++i) {
@@ -413,6 +421,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     const double end_s = dxl::monotonic_s();
     ++r.cycle;
     r.stamp_s = end_s;
+    r.sample_s = sample_s;
     r.cycle_busy_s = end_s - start_s;
     r.crc_errors = bus.crc_errors();
     readings_.publish(r);
@@ -438,17 +447,15 @@ Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
     last_error_ = message(reading_.fault, reading_.fault_servo, reading_.hardware_error);
     return Status::kError;
   }
+  // The bus and the loop are not in step: extrapolate the servos' positions from when they
+  // were sampled to the loop's stamp with their present velocities, so that the loop sees
+  // steady motion rather than a reading that stands still one cycle and jumps the next.
+  const double age_s = std::clamp(stamp_s - reading_.sample_s, -stale_timeout_s_, stale_timeout_s_);
   out.stamp_s = stamp_s;
   out.module_count = module_count_;
   for (std::uint32_t m = 0; m < module_count_; ++m) {
-    const std::int32_t w = wheel_servo_[m];
-    out.wheel_angle_rad[m] = w >= 0 ? output_angle(static_cast<std::size_t>(w),
-                                                   reading_.position[static_cast<std::size_t>(w)])
-                                    : 0.0;
-    const std::int32_t s = steer_servo_[m];
-    out.steer_angle_rad[m] = s >= 0 ? output_angle(static_cast<std::size_t>(s),
-                                                   reading_.position[static_cast<std::size_t>(s)])
-                                    : 0.0;
+    out.wheel_angle_rad[m] = angle_at(wheel_servo_[m], age_s);
+    out.steer_angle_rad[m] = angle_at(steer_servo_[m], age_s);
   }
   out.gyro_valid = false;
   out.gyro_wz_radps = 0.0;

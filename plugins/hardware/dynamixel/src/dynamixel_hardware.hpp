@@ -53,13 +53,14 @@ class DynamixelHardware final : public Hardware {
     double direction = 1.0;       ///< +1 or -1: servo positive = output positive
     double gear_ratio = 1.0;      ///< servo revolutions per output revolution
     double zero_offset_rad = 0.0;  ///< output angle = servo angle / ratio - offset
-    std::string name;             ///< "left wheel", "module 2 steering"
+    std::string name;             ///< "left wheel", "wheel 2", "steer 2"
   };
 
   /// What the bus thread publishes once per bus cycle.
   struct Reading {
     std::uint64_t cycle = 0;
-    double stamp_s = 0.0;  ///< CLOCK_MONOTONIC at the end of the Sync Read
+    double stamp_s = 0.0;   ///< CLOCK_MONOTONIC at the end of the Sync Read
+    double sample_s = 0.0;  ///< CLOCK_MONOTONIC when the Sync Read went out
     std::array<std::int32_t, kMaxServos> position{};  ///< servo counts
     std::array<std::int32_t, kMaxServos> velocity{};  ///< 0.229 rpm units
     FaultKind fault = FaultKind::kNone;
@@ -79,6 +80,10 @@ class DynamixelHardware final : public Hardware {
   Status write(const ActuatorCommand& command) noexcept override;
   [[nodiscard]] const char* last_error() const noexcept override { return last_error_; }
 
+  /// Real-time safe. The fixed message of a fault of servo `servo` (index into servos()).
+  [[nodiscard]] const char* message(FaultKind kind, std::size_t servo,
+                                    std::uint8_t hardware_error) const noexcept;
+
   // For tests and benches.
   [[nodiscard]] const std::vector<Servo>& servos() const noexcept { return servos_; }
   [[nodiscard]] const Reading& last_reading() const noexcept { return reading_; }
@@ -91,11 +96,11 @@ class DynamixelHardware final : public Hardware {
   void bus_loop(Reading r) noexcept;  // starts from the activation reading
   // Off the loop: a failed step of activate()/deactivate() names the servo; false then.
   bool setup_servo(dynamixel::Bus& bus, std::size_t i);
-  [[nodiscard]] const char* message(FaultKind kind, std::size_t servo,
-                                    std::uint8_t hardware_error) const noexcept;
   [[nodiscard]] std::int32_t wheel_goal(std::size_t i, double rate_radps) const noexcept;
   [[nodiscard]] std::int32_t steer_goal(std::size_t i, double angle_rad) const noexcept;
   [[nodiscard]] double output_angle(std::size_t i, std::int32_t counts) const noexcept;
+  // Output angle of servo `servo` (-1: none, 0) extrapolated `age_s` past its sample.
+  [[nodiscard]] double angle_at(std::int32_t servo, double age_s) const noexcept;
 
   // Configuration.
   std::string port_path_;

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <thread>
 
@@ -59,9 +60,12 @@ void configure(DynamixelHardware& hw, const RobotModel& model, const std::string
   hw.configure(ctx);
 }
 
+// A reply timeout that a loaded test machine keeps, unless `extra` sets one.
 std::string diff_params(const std::string& port, const std::string& extra = "") {
-  return "{port: " + port +
-         ", left: {id: 1}, right: {id: 2, direction: -1, gear_ratio: 2.0}" + extra + "}";
+  const std::string timeout =
+      extra.find("reply_timeout_s") == std::string::npos ? ", reply_timeout_s: 0.05" : "";
+  return "{port: " + port + ", left: {id: 1}, right: {id: 2, direction: -1, gear_ratio: 2.0}" +
+         timeout + extra + "}";
 }
 
 // Runs a 1 kHz read/write loop for `seconds` with `command`; returns the last status and
@@ -120,6 +124,37 @@ TEST(DynamixelHardware, RefusesBadParametersNamingTheKey) {
   }
 }
 
+TEST(DynamixelHardware, EveryFaultMessageFitsTheLoopsFaultDetail) {
+  // The loop keeps 63 characters of a cause: the longest IDs and names still fit whole.
+  const RobotModel model = swpc(swivel::kMaxModules);
+  std::string yaml = "{port: /dev/null, modules: [";
+  for (unsigned m = 0; m < swivel::kMaxModules; ++m) {
+    yaml += (m == 0 ? "" : ",") + std::string("{wheel: {id: ") + std::to_string(221 + 2 * m) +
+            "}, steer: {id: " + std::to_string(222 + 2 * m) + "}}";
+  }
+  yaml += "]}";
+  DynamixelHardware hw;
+  configure(hw, model, yaml);
+  ASSERT_EQ(hw.servos().size(), 2 * swivel::kMaxModules);
+  EXPECT_STREQ(hw.message(DynamixelHardware::FaultKind::kHardwareError, 31,
+                          dxl::hardware_error::kMotorEncoder),
+               "dynamixel ID 252 (steer 15): HW error: motor encoder error");
+  EXPECT_STREQ(hw.message(DynamixelHardware::FaultKind::kSilent, 30, 0),
+               "dynamixel ID 251 (wheel 15): no status packet in time");
+  for (std::size_t i = 0; i < hw.servos().size(); ++i) {
+    for (const auto kind : {DynamixelHardware::FaultKind::kSilent,
+                            DynamixelHardware::FaultKind::kCrcRun,
+                            DynamixelHardware::FaultKind::kStatusError}) {
+      EXPECT_LE(std::strlen(hw.message(kind, i, 0)), 63U) << hw.message(kind, i, 0);
+    }
+    for (unsigned bit = 0; bit < 8; ++bit) {
+      const char* text = hw.message(DynamixelHardware::FaultKind::kHardwareError, i,
+                                    static_cast<std::uint8_t>(1U << bit));
+      EXPECT_LE(std::strlen(text), 63U) << text;
+    }
+  }
+}
+
 TEST(DynamixelHardware, ActivationNamesAMissingServoOrPort) {
   dxl::Emulator emulator(ids({1}));
   const RobotModel model = differential();
@@ -127,7 +162,7 @@ TEST(DynamixelHardware, ActivationNamesAMissingServoOrPort) {
   configure(hw, model, diff_params(emulator.port()));
   EXPECT_EQ(hw.activate(), Status::kError);
   EXPECT_STREQ(hw.last_error(),
-               "dynamixel: servo ID 2 (right wheel): does not answer a ping");
+               "dynamixel ID 2 (right wheel): does not answer a ping");
   DynamixelHardware no_port;
   configure(no_port, model, diff_params("/nonexistent/ttyUSB9"));
   EXPECT_EQ(no_port.activate(), Status::kError);
@@ -179,7 +214,7 @@ TEST(DynamixelHardware, SwpcSteersInExtendedPositionAndDrivesWheels) {
   DynamixelHardware hw;
   configure(hw, model,
             "{port: " + emulator.port() +
-                ", modules: ["
+                ", reply_timeout_s: 0.05, modules: ["
                 "{wheel: {id: 1}, steer: {id: 11, zero_offset_rad: 0.5}},"
                 "{wheel: {id: 2}, steer: {id: 12, gear_ratio: 3}},"
                 "{wheel: {id: 3, direction: -1}, steer: {id: 13, direction: -1}},"
@@ -231,15 +266,14 @@ TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
   emulator.set_silent(2, true);
   ASSERT_EQ(run(hw, wheels(3.0, 3.0), 1.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(),
-               "dynamixel: servo ID 2 (right wheel) not answering: status packet missing or "
-               "late");
+               "dynamixel ID 2 (right wheel): no status packet in time");
   hw.on_error(hw.last_error());
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   EXPECT_EQ(emulator.goal_velocity(1), 0) << "the bus thread stops the wheels itself";
   // The fault stays until a clear; the clear names the servo while it is still silent.
   EXPECT_EQ(hw.read(2.0, s), Status::kError);
   EXPECT_EQ(hw.activate(), Status::kError);
-  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 2 (right wheel): does not answer a ping");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): does not answer a ping");
   emulator.set_silent(2, false);
   ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
   EXPECT_EQ(run(hw, wheels(0.0, 0.0), 0.05, s), Status::kOk) << hw.last_error();
@@ -250,15 +284,14 @@ TEST(DynamixelHardware, LateRepliesAreAFaultNamingTheServo) {
   dxl::Emulator emulator(ids({1, 2}));
   const RobotModel model = differential();
   DynamixelHardware hw;
-  configure(hw, model, diff_params(emulator.port(), ", reply_timeout_s: 0.004"));
+  configure(hw, model, diff_params(emulator.port(), ", reply_timeout_s: 0.05"));
   ASSERT_EQ(hw.activate(), Status::kOk);
   HardwareState s;
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk);
-  emulator.set_reply_delay(1, 0.02);
+  emulator.set_reply_delay(1, 0.25);
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(),
-               "dynamixel: servo ID 1 (left wheel) not answering: status packet missing or "
-               "late");
+               "dynamixel ID 1 (left wheel): no status packet in time");
   emulator.set_reply_delay(1, 0.0);
   hw.deactivate();
 }
@@ -287,7 +320,7 @@ TEST(DynamixelHardware, CrcErrorsAreCountedAndARunTrips) {
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
   emulator.set_corrupt_crc(2, true);
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
-  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 2 (right wheel): 3 CRC errors in a row");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): 3 CRC errors in a row");
   EXPECT_GE(hw.last_reading().crc_errors, 3U);
   emulator.set_corrupt_crc(2, false);
   hw.deactivate();
@@ -303,11 +336,11 @@ TEST(DynamixelHardware, HardwareErrorBitIsReportedWithItsMeaning) {
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
   emulator.set_hardware_error(1, dxl::hardware_error::kOverload);
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
-  EXPECT_STREQ(hw.last_error(), "dynamixel: servo ID 1 (left wheel): hardware error: overload");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 1 (left wheel): HW error: overload");
   EXPECT_EQ(hw.activate(), Status::kError);
   EXPECT_STREQ(hw.last_error(),
-               "dynamixel: servo ID 1 (left wheel): hardware error: overload (power-cycle or "
-               "reboot the servo)");
+               "dynamixel ID 1 (left wheel): hardware error: overload (power-cycle or reboot "
+               "the servo)");
   emulator.set_hardware_error(1, 0);
   ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
   hw.deactivate();
