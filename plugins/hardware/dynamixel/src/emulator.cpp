@@ -144,9 +144,13 @@ void Emulator::advance(double now_s) {
         rate_counts_s = get(s.table, address::kGoalVelocity) * kCountsPerUnitS;
       } else if (s.table[address::kOperatingMode] == operating_mode::kExtendedPosition &&
                  dt > 0.0) {
-        const double max_rate = options_.max_position_speed_rev_s * kPositionCountsPerRev;
+        // First-order tracking of the goal (time constant position_time_constant_s), at
+        // most max_position_speed_rev_s.
+        const double max_step = options_.max_position_speed_rev_s * kPositionCountsPerRev * dt;
         const double error = get(s.table, address::kGoalPosition) - s.position_counts;
-        rate_counts_s = std::clamp(error / dt, -max_rate, max_rate);
+        const double step =
+            error * (1.0 - std::exp(-dt / std::max(options_.position_time_constant_s, 1e-6)));
+        rate_counts_s = std::clamp(step, -max_step, max_step) / dt;
       }
     }
     s.position_counts += rate_counts_s * dt;

@@ -4,7 +4,7 @@
 //
 // It serves PING, READ, WRITE, SYNC_READ and SYNC_WRITE for several IDs, each with a
 // control table of 256 bytes. Motors follow Goal Velocity (operating mode 1) or Goal
-// Position (mode 4, at up to max_position_speed_rev_s) while Torque Enable is 1; writing
+// Position (mode 4, first order, at up to max_position_speed_rev_s) while Torque Enable is 1; writing
 // the Operating Mode with the torque on is refused (access error), as on the servos.
 // Injectable faults per ID: silence (no status packets), corrupt CRC (replies with a wrong
 // CRC), hardware error bits (Hardware Error Status set, the alert bit in every status, the
@@ -32,7 +32,8 @@ class Emulator {
     std::vector<std::uint8_t> ids{1, 2};
     std::uint32_t baud = 0;  ///< 0: replies as fast as the pty carries them
     double return_delay_s = 0.0;  ///< per status packet, like Return Delay Time
-    double max_position_speed_rev_s = 2.0;  ///< position mode tracking speed (motor side)
+    double max_position_speed_rev_s = 2.0;  ///< position mode: top speed (motor side)
+    double position_time_constant_s = 0.01;  ///< position mode: first-order tracking
     std::uint16_t model_number = 1020;  ///< XM430-W350
   };
   struct TorqueWrite {
