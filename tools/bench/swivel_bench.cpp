@@ -17,6 +17,9 @@
 #include <vector>
 
 #include "bench_plugins.hpp"
+#ifdef SWIVEL_BENCH_HARDWARE
+#include "hardware_bench.hpp"
+#endif
 #include "swap_bench.hpp"
 #include "swivel/rt/control_loop.hpp"
 #include "swivel/rt/realtime.hpp"
@@ -201,9 +204,28 @@ int main(int argc, char** argv) {
                  "do not try SCHED_FIFO, mlockall or cpu_dma_latency");
   swap->add_option("--config", swap_settings.config, "daemon configuration naming the plugins")
       ->check(CLI::ExistingFile);
+#ifdef SWIVEL_BENCH_HARDWARE
+  swivel::bench::HardwareSettings hardware_settings;
+  hardware_settings.robots_dir =
+      (std::filesystem::path(SWIVEL_DEFAULT_CONFIG).parent_path() / "robots").string();
+  auto* hardware = app.add_subcommand(
+      "hardware", "the dynamixel plugin on an emulated bus: bus round trip, loop lateness");
+  hardware->add_option("--seconds", hardware_settings.seconds, "duration of each measurement, s")
+      ->check(CLI::Range(0.1, 3600.0));
+  hardware->add_option("--rate-hz", hardware_settings.rate_hz, "loop rate of the lateness runs")
+      ->check(CLI::Range(1.0, 10000.0));
+  hardware->add_flag("!--no-realtime", hardware_settings.realtime,
+                     "do not try SCHED_FIFO, mlockall or cpu_dma_latency");
+  hardware->add_option("--robots", hardware_settings.robots_dir,
+                       "directory with docent.yaml and swpc4.yaml")
+      ->check(CLI::ExistingDirectory);
+#endif
   CLI11_PARSE(app, argc, argv);
   try {
     if (swap->parsed()) return swivel::bench::run_swap(swap_settings);
+#ifdef SWIVEL_BENCH_HARDWARE
+    if (hardware->parsed()) return swivel::bench::run_hardware(hardware_settings);
+#endif
     return run(settings);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "swivel-bench: %s\n", e.what());

@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 #include <pty.h>
 #include <termios.h>
 #include <time.h>
@@ -162,6 +164,11 @@ void Emulator::advance(double now_s) {
 }
 
 void Emulator::serve() noexcept {
+  if (options_.fifo_priority > 0) {
+    sched_param param{};
+    param.sched_priority = options_.fifo_priority;
+    (void)pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);  // best effort
+  }
   Parser parser;
   std::array<std::uint8_t, 512> buffer{};
   std::size_t packet_bytes = 0;
@@ -183,6 +190,11 @@ void Emulator::serve() noexcept {
       packet_bytes += used;
       if (r == Parser::Result::kNeedMore) continue;
       ++requests_;
+      if (options_.baud > 0) {  // every request occupies the wire, answered or not
+        std::lock_guard lock(mutex_);
+        wire_free_s_ = std::max(wire_free_s_, received_s) +
+                       10.0 / options_.baud * static_cast<double>(packet_bytes);
+      }
       if (r == Parser::Result::kPacket) {
         try {
           handle(parser.packet(), packet_bytes, received_s);
@@ -208,10 +220,11 @@ void Emulator::reply(std::uint8_t id, Servo& servo, std::uint8_t error, const st
   std::memcpy(out.data(), wire.data(), wire.size());
   if (servo.corrupt_crc) out[wire.size() - 1] ^= 0x5A;
   // The wire: the request, then each reply in turn, at the emulated rate.
+  // (serve() has put the request on the wire already.)
+  (void)request_bytes;
   double send_at = received_s + servo.reply_delay_s + options_.return_delay_s;
   if (options_.baud > 0) {
     const double byte_s = 10.0 / options_.baud;
-    wire_free_s_ = std::max(wire_free_s_, received_s + byte_s * static_cast<double>(request_bytes));
     send_at = std::max(send_at, wire_free_s_ + options_.return_delay_s) +
               byte_s * static_cast<double>(wire.size());
     wire_free_s_ = send_at;

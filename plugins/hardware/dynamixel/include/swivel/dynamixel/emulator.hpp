@@ -35,6 +35,7 @@ class Emulator {
     double max_position_speed_rev_s = 2.0;  ///< position mode: top speed (motor side)
     double position_time_constant_s = 0.01;  ///< position mode: first-order tracking
     std::uint16_t model_number = 1020;  ///< XM430-W350
+    int fifo_priority = 0;  ///< > 0: serve on SCHED_FIFO at this priority where permitted
   };
   struct TorqueWrite {
     std::uint8_t id = 0;
