@@ -70,10 +70,11 @@ std::string write_config(const std::string& dir, const std::string& robot,
   return path;
 }
 
-// Reply timeout and stale limit generous enough for a loaded test machine.
+// Reply timeout and stale limit generous enough for a loaded test machine (the emulator is
+// an ordinary thread).
 std::string docent_params(const std::string& port) {
   return "{port: " + port +
-         ", reply_timeout_s: 0.05, stale_timeout_s: 0.5, left: {id: 1}, right: {id: 2, "
+         ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, left: {id: 1}, right: {id: 2, "
          "direction: -1}}";
 }
 
@@ -147,7 +148,7 @@ TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueO
   dxl::Emulator emulator(servo_ids(ids));
   const std::string dir = make_test_dir("dxl_swpc4");
   std::string params = "{port: " + emulator.port() +
-                       ", reply_timeout_s: 0.05, stale_timeout_s: 0.5, modules: [";
+                       ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: [";
   for (int m = 1; m <= 4; ++m) {
     params += (m == 1 ? "" : ", ") + std::string("{wheel: {id: ") + std::to_string(m) +
               "}, steer: {id: " + std::to_string(10 + m) + "}}";

@@ -353,6 +353,8 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
   ActuatorCommand command{};
   command.module_count = module_count_;
   const std::span<const std::uint8_t> ids(all_ids_);
+  // The statuses of the Sync Read: 11 bytes of frame and 8 of data each, 10 bits a byte.
+  const double status_wire_s = static_cast<double>(19 * ids.size()) * 10.0 / baud_;
   double last_s = dxl::monotonic_s();
   double next_s = last_s;
   while (!stop_.load(std::memory_order_acquire)) {
@@ -380,7 +382,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     }
     ok = ok && (steer_ids_.empty() || bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
                                                      {data.data(), 4 * steer_ids_.size()}));
-    const double sample_s = dxl::monotonic_s();
+    const double request_s = dxl::monotonic_s();
     ok = ok && bus.sync_read(dxl::address::kPresentVelocity, 8, ids, replies, reply_timeout_s_);
     if (!ok && r.fault == FaultKind::kNone) r.fault = FaultKind::kPort;
     for (std::size_t i = 0; ok && i < ids.size(); ++i) {
@@ -421,7 +423,10 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     const double end_s = dxl::monotonic_s();
     ++r.cycle;
     r.stamp_s = end_s;
-    r.sample_s = sample_s;
+    // A servo samples its present values when it takes the request and the last status
+    // arrives after all of them crossed the wire: the sample is that wire time before the
+    // end (a late start, on a busy host or device, then does not skew it).
+    r.sample_s = std::max(request_s, end_s - status_wire_s);
     r.cycle_busy_s = end_s - start_s;
     r.crc_errors = bus.crc_errors();
     readings_.publish(r);

@@ -60,7 +60,7 @@ class DynamixelHardware final : public Hardware {
   struct Reading {
     std::uint64_t cycle = 0;
     double stamp_s = 0.0;   ///< CLOCK_MONOTONIC at the end of the Sync Read
-    double sample_s = 0.0;  ///< CLOCK_MONOTONIC when the Sync Read went out
+    double sample_s = 0.0;  ///< CLOCK_MONOTONIC the servos sampled (estimated)
     std::array<std::int32_t, kMaxServos> position{};  ///< servo counts
     std::array<std::int32_t, kMaxServos> velocity{};  ///< 0.229 rpm units
     FaultKind fault = FaultKind::kNone;

@@ -60,23 +60,23 @@ void configure(DynamixelHardware& hw, const RobotModel& model, const std::string
   hw.configure(ctx);
 }
 
-// A reply timeout that a loaded test machine keeps, unless `extra` sets one.
+// Timeouts that a loaded test machine keeps (unless `extra` sets the reply timeout): the
+// emulator is an ordinary thread.
 std::string diff_params(const std::string& port, const std::string& extra = "") {
   const std::string timeout =
-      extra.find("reply_timeout_s") == std::string::npos ? ", reply_timeout_s: 0.05" : "";
+      (extra.find("reply_timeout_s") == std::string::npos ? ", reply_timeout_s: 0.2" : "") +
+      std::string(", stale_timeout_s: 1.0");
   return "{port: " + port + ", left: {id: 1}, right: {id: 2, direction: -1, gear_ratio: 2.0}" +
          timeout + extra + "}";
 }
 
-// Runs a 1 kHz read/write loop for `seconds` with `command`; returns the last status and
-// state (stops at the first kError).
+// Runs a 1 kHz read/write loop for `seconds` with `command`, stamped on CLOCK_MONOTONIC like
+// the loop's; returns the last status and state (stops at the first kError).
 Status run(DynamixelHardware& hw, const ActuatorCommand& command, double seconds,
            HardwareState& state) {
-  const auto start = std::chrono::steady_clock::now();
-  double t = 0.0;
-  while (t < seconds) {
-    t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (hw.read(t, state) != Status::kOk) return Status::kError;
+  const double start = dxl::monotonic_s();
+  for (double now = start; now - start < seconds; now = dxl::monotonic_s()) {
+    if (hw.read(now, state) != Status::kOk) return Status::kError;
     if (hw.write(command) != Status::kOk) return Status::kError;
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
@@ -214,7 +214,7 @@ TEST(DynamixelHardware, SwpcSteersInExtendedPositionAndDrivesWheels) {
   DynamixelHardware hw;
   configure(hw, model,
             "{port: " + emulator.port() +
-                ", reply_timeout_s: 0.05, modules: ["
+                ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: ["
                 "{wheel: {id: 1}, steer: {id: 11, zero_offset_rad: 0.5}},"
                 "{wheel: {id: 2}, steer: {id: 12, gear_ratio: 3}},"
                 "{wheel: {id: 3, direction: -1}, steer: {id: 13, direction: -1}},"
@@ -264,14 +264,14 @@ TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
   ASSERT_EQ(run(hw, wheels(3.0, 3.0), 0.1, s), Status::kOk);
   EXPECT_NE(emulator.goal_velocity(1), 0);
   emulator.set_silent(2, true);
-  ASSERT_EQ(run(hw, wheels(3.0, 3.0), 1.0, s), Status::kError);
+  ASSERT_EQ(run(hw, wheels(3.0, 3.0), 3.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(),
                "dynamixel ID 2 (right wheel): no status packet in time");
   hw.on_error(hw.last_error());
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   EXPECT_EQ(emulator.goal_velocity(1), 0) << "the bus thread stops the wheels itself";
   // The fault stays until a clear; the clear names the servo while it is still silent.
-  EXPECT_EQ(hw.read(2.0, s), Status::kError);
+  EXPECT_EQ(hw.read(dxl::monotonic_s(), s), Status::kError);
   EXPECT_EQ(hw.activate(), Status::kError);
   EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): does not answer a ping");
   emulator.set_silent(2, false);
@@ -284,12 +284,12 @@ TEST(DynamixelHardware, LateRepliesAreAFaultNamingTheServo) {
   dxl::Emulator emulator(ids({1, 2}));
   const RobotModel model = differential();
   DynamixelHardware hw;
-  configure(hw, model, diff_params(emulator.port(), ", reply_timeout_s: 0.05"));
+  configure(hw, model, diff_params(emulator.port(), ", reply_timeout_s: 0.1"));
   ASSERT_EQ(hw.activate(), Status::kOk);
   HardwareState s;
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk);
-  emulator.set_reply_delay(1, 0.25);
-  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  emulator.set_reply_delay(1, 0.5);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(),
                "dynamixel ID 1 (left wheel): no status packet in time");
   emulator.set_reply_delay(1, 0.0);
@@ -319,7 +319,7 @@ TEST(DynamixelHardware, CrcErrorsAreCountedAndARunTrips) {
   HardwareState s;
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
   emulator.set_corrupt_crc(2, true);
-  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): 3 CRC errors in a row");
   EXPECT_GE(hw.last_reading().crc_errors, 3U);
   emulator.set_corrupt_crc(2, false);
@@ -335,7 +335,7 @@ TEST(DynamixelHardware, HardwareErrorBitIsReportedWithItsMeaning) {
   HardwareState s;
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.05, s), Status::kOk);
   emulator.set_hardware_error(1, dxl::hardware_error::kOverload);
-  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 1.0, s), Status::kError);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
   EXPECT_STREQ(hw.last_error(), "dynamixel ID 1 (left wheel): HW error: overload");
   EXPECT_EQ(hw.activate(), Status::kError);
   EXPECT_STREQ(hw.last_error(),
@@ -359,19 +359,21 @@ TEST(DynamixelHardware, ReadAndWriteDoNotTouchTheHeap) {
   {
     swivel::test::AllocCounter counter;
     for (int i = 0; i < 300; ++i) {
-      (void)hw.read(1.0 + 0.001 * i, s);
+      (void)hw.read(dxl::monotonic_s(), s);
       (void)hw.write(c);
       usleep(500);
     }
     emulator.set_silent(1, true);  // the fault path too
-    for (int i = 0; i < 300; ++i) {
-      (void)hw.read(2.0 + 0.001 * i, s);
+    const double start = dxl::monotonic_s();
+    while (dxl::monotonic_s() - start < 3.0) {
+      const Status status = hw.read(dxl::monotonic_s(), s);
       (void)hw.write(c);
+      if (status != Status::kOk) break;
       usleep(500);
     }
     counts = counter.counts();
   }
-  EXPECT_EQ(hw.read(3.0, s), Status::kError);
+  EXPECT_EQ(hw.read(dxl::monotonic_s(), s), Status::kError);
   EXPECT_EQ(counts.allocations, 0U);
   EXPECT_EQ(counts.deallocations, 0U);
   emulator.set_silent(1, false);
