@@ -445,7 +445,7 @@ Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
     reading_ = fresh;
     cycles_without_reading_ = 0;
   } else if (++cycles_without_reading_ > stale_cycles_) {
-    last_error_ = "dynamixel: no reading from the bus thread within stale_timeout_s";
+    last_error_ = "dynamixel: bus thread published nothing for stale_timeout_s";
     return Status::kError;
   }
   if (reading_.fault != FaultKind::kNone) {

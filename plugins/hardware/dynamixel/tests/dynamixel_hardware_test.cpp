@@ -296,6 +296,31 @@ TEST(DynamixelHardware, LateRepliesAreAFaultNamingTheServo) {
   hw.deactivate();
 }
 
+TEST(DynamixelHardware, ABusThreadThatPublishesNothingIsStale) {
+  // Replies slower than stale_timeout_s but within the reply timeout: the bus thread waits,
+  // publishes nothing, and read() says so within the stale limit.
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  PluginContext ctx;
+  ctx.params = YAML::Load("{port: " + emulator.port() +
+                          ", reply_timeout_s: 1.0, stale_timeout_s: 0.05, left: {id: 1}, "
+                          "right: {id: 2}}");
+  ctx.robot = &model;
+  ctx.period_s = 0.001;
+  hw.configure(ctx);
+  ASSERT_EQ(hw.activate(), Status::kOk);
+  emulator.set_reply_delay(2, 0.6);
+  HardwareState s;
+  const double start = dxl::monotonic_s();
+  ASSERT_EQ(run(hw, wheels(0.0, 0.0), 3.0, s), Status::kError);
+  const double took = dxl::monotonic_s() - start;
+  EXPECT_STREQ(hw.last_error(), "dynamixel: bus thread published nothing for stale_timeout_s");
+  EXPECT_LT(took, 0.6) << "before the late reply came";
+  emulator.set_reply_delay(2, 0.0);
+  hw.deactivate();
+}
+
 TEST(DynamixelHardware, CrcErrorsAreCountedAndARunTrips) {
   dxl::Emulator emulator(ids({1, 2}));
   const RobotModel model = differential();
