@@ -13,6 +13,7 @@
 #include "dds_test_util.hpp"
 #include "ros2_interfaces.h"
 #include "swivel.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
@@ -26,7 +27,7 @@ using test::wait_for;
 
 StateSnapshot sample_snapshot() {
   StateSnapshot s;
-  s.stamp_s = monotonic_now_s();
+  s.stamp_s = swivel::monotonic_s();
   s.estimate.pose = {1.5, -2.0, 0.3};
   for (std::size_t i = 0; i < 9; ++i) s.estimate.covariance[i] = 0.1 * static_cast<double>(i + 1);
   s.estimate.has_covariance = true;
@@ -98,7 +99,7 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
            }) && id == robot;
   })) << "no RobotState within 10 s";
   EXPECT_GT(got.cycle, 0u);
-  EXPECT_NEAR(got.stamp_s, monotonic_now_s(), 5.0);
+  EXPECT_NEAR(got.stamp_s, swivel::monotonic_s(), 5.0);
   EXPECT_DOUBLE_EQ(got.x_m, 1.5);
   EXPECT_DOUBLE_EQ(got.y_m, -2.0);
   EXPECT_DOUBLE_EQ(got.yaw_rad, 0.3);
@@ -192,7 +193,7 @@ TEST(DdsBridge, PassesVelocityCommandsForThisRobotOnly) {
   EXPECT_DOUBLE_EQ(received[0].twist.vx_mps, 0.4);
   EXPECT_DOUBLE_EQ(received[0].twist.vy_mps, 0.1);
   EXPECT_DOUBLE_EQ(received[0].twist.wz_radps, -0.3);
-  EXPECT_NEAR(received[0].received_s, monotonic_now_s(), 5.0);
+  EXPECT_NEAR(received[0].received_s, swivel::monotonic_s(), 5.0);
   EXPECT_EQ(received[0].sequence, 1u);
   EXPECT_EQ(bridge.counters().commands_ignored, 1u);
   EXPECT_EQ(bridge.counters().commands_received, 1u);
@@ -271,7 +272,7 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
   EXPECT_DOUBLE_EQ(captures[0].pose.x_m, 1.0);
   EXPECT_DOUBLE_EQ(captures[0].pose.y_m, 2.0);
   EXPECT_DOUBLE_EQ(captures[0].pose.yaw_rad, -0.5);
-  EXPECT_NEAR(captures[1].stamp_s, monotonic_now_s(), 5.0);
+  EXPECT_NEAR(captures[1].stamp_s, swivel::monotonic_s(), 5.0);
   EXPECT_EQ(requests[0].verb, "reload");
   EXPECT_EQ(requests[0].argument, "");
   EXPECT_EQ(requests[0].request_id, 5u);

@@ -16,6 +16,7 @@
 
 #include "dds_test_util.hpp"
 #include "ros2_interfaces.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/options.hpp"
 #include "swivel/dds/topics.hpp"
@@ -47,7 +48,7 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   DdsBridge bridge(ros2_options(ns), "ros2_robot", {.read_state = [&](StateSnapshot& s) {
                      s = StateSnapshot{};
                      s.cycle = ++cycle;
-                     s.stamp_s = monotonic_now_s();
+                     s.stamp_s = swivel::monotonic_s();
                      s.estimate.pose = {1.0, 2.0, M_PI / 2};
                      s.estimate.has_covariance = true;
                      s.estimate.covariance = {1, 2, 3, 4, 5, 6, 7, 8, 9};

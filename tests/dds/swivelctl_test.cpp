@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dds_test_util.hpp"
+#include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 
 namespace swivel::dds {
@@ -62,7 +63,7 @@ class FakeDaemon {
                          [this](StateSnapshot& s) {
                            s = StateSnapshot{};
                            s.cycle = ++cycle_;
-                           s.stamp_s = monotonic_now_s();
+                           s.stamp_s = swivel::monotonic_s();
                            s.estimate.pose.x_m = 0.001 * static_cast<double>(cycle_);
                            s.mode = LoopMode::kVelocity;
                            std::snprintf(s.localization_plugin.data(), s.localization_plugin.size(),

@@ -7,12 +7,12 @@
 // last), and the daemon logs that it deactivated the hardware after the robot stopped.
 
 #include <gtest/gtest.h>
-#include <time.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "process_util.hpp"
+#include "swivel/clock.hpp"
 
 namespace swivel::test {
 namespace {
@@ -21,12 +21,6 @@ using nlohmann::json;
 
 constexpr double kSpeedMps = 0.5;
 constexpr double kRateHz = 1000.0;
-
-double monotonic_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 struct StopRun {
   double distance_m = 0.0;  ///< travelled after SIGTERM

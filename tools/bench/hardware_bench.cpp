@@ -71,10 +71,10 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   std::vector<std::uint8_t> goals(4 * ids.size(), 0);
   std::vector<dxl::SyncReply> replies(ids.size());
   BusFigures f;
-  const double start = dxl::monotonic_s();
+  const double start = monotonic_s();
   double now = start;
   while (now - start < seconds) {
-    const double t0 = dxl::monotonic_s();
+    const double t0 = monotonic_s();
     bool ok = bus.sync_write(dxl::address::kGoalVelocity, 4, wheels, {goals.data(), 4 * wheels.size()});
     if (!steers.empty()) {
       ok = ok && bus.sync_write(dxl::address::kGoalPosition, 4, steers,
@@ -82,7 +82,7 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
     }
     ok = ok && bus.sync_read(dxl::address::kPresentVelocity, 8, ids, replies, 0.05);
     for (const auto& r : replies) ok = ok && r.result == dxl::BusResult::kOk;
-    now = dxl::monotonic_s();
+    now = monotonic_s();
     if (!ok) ++f.failures;
     f.cycle_us.push_back((now - t0) * 1e6);
   }
@@ -107,12 +107,12 @@ void floor_lateness(const HardwareSettings& s, rt::LatencyHistogram& lateness) {
     if (s.realtime) (void)rt::make_thread_fifo(s.priority);
     rt::prefault_stack();
     const auto period_ns = static_cast<std::int64_t>(1e9 / s.rate_hz);
-    const std::int64_t start_ns = rt::monotonic_ns();
+    const std::int64_t start_ns = monotonic_ns();
     const auto end_ns = start_ns + static_cast<std::int64_t>(s.seconds * 1e9);
     std::int64_t deadline_ns = start_ns + period_ns;
     while (deadline_ns < end_ns) {
       rt::sleep_until_ns(deadline_ns);
-      const std::int64_t woke_ns = rt::monotonic_ns();
+      const std::int64_t woke_ns = monotonic_ns();
       lateness.record(woke_ns - deadline_ns);
       deadline_ns += period_ns;
       if (woke_ns > deadline_ns) deadline_ns += ((woke_ns - deadline_ns) / period_ns + 1) * period_ns;

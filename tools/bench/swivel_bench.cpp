@@ -60,12 +60,12 @@ void run_floor(const Settings& s, FloorResult& result) {
     if (s.realtime) result.scheduling_warning = swivel::rt::make_thread_fifo(s.priority);
     swivel::rt::prefault_stack();
     const auto period_ns = static_cast<std::int64_t>(1e9 / s.rate_hz);
-    const std::int64_t start_ns = swivel::rt::monotonic_ns();
+    const std::int64_t start_ns = swivel::monotonic_ns();
     const auto end_ns = start_ns + static_cast<std::int64_t>(s.seconds * 1e9);
     std::int64_t deadline_ns = start_ns + period_ns;
     while (deadline_ns < end_ns) {
       swivel::rt::sleep_until_ns(deadline_ns);
-      const std::int64_t woke_ns = swivel::rt::monotonic_ns();
+      const std::int64_t woke_ns = swivel::monotonic_ns();
       result.lateness.record(woke_ns - deadline_ns);
       deadline_ns += period_ns;
       if (woke_ns > deadline_ns) {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "swivel.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
 
@@ -71,7 +72,7 @@ int run_server(const std::string& robot, double rate_hz) {
       std::this_thread::sleep_until(next);
       const std::scoped_lock lock(mutex);
       latest.cycle = ++cycle;
-      latest.stamp_s = monotonic_now_s();
+      latest.stamp_s = swivel::monotonic_s();
     }
   });
   DdsOptions options;
@@ -126,10 +127,10 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   std::vector<double> ages_us;
   const dds_entity_t ws = dds_create_waitset(pp.handle());
   dds_waitset_attach(ws, dds_create_readcondition(state, DDS_ANY_STATE), 0);
-  const double deadline_first = monotonic_now_s() + 10.0;
+  const double deadline_first = swivel::monotonic_s() + 10.0;
   double end = 0.0;
-  while (end == 0.0 || monotonic_now_s() < end) {
-    if (end == 0.0 && monotonic_now_s() > deadline_first) {
+  while (end == 0.0 || swivel::monotonic_s() < end) {
+    if (end == 0.0 && swivel::monotonic_s() > deadline_first) {
       std::fprintf(stderr, "swivel-bench-dds: no state from the server within 10 s\n");
       return finish(1);
     }
@@ -137,7 +138,7 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
     void* samples[16] = {nullptr};
     dds_sample_info_t infos[16];
     const dds_return_t n = dds_take(state, samples, infos, 16, 16);
-    const double now = monotonic_now_s();
+    const double now = swivel::monotonic_s();
     for (dds_return_t i = 0; i < n; ++i) {
       const auto* s = static_cast<const swivel_msg_RobotState*>(samples[i]);
       if (!infos[i].valid_data || robot != s->robot_id) continue;
@@ -151,8 +152,8 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   }
 
   // Floor: ping-pong with the same QoS between the same two processes.
-  const double match_deadline = monotonic_now_s() + 10.0;
-  while (!matched(ping) && monotonic_now_s() < match_deadline) {
+  const double match_deadline = swivel::monotonic_s() + 10.0;
+  while (!matched(ping) && swivel::monotonic_s() < match_deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   const dds_entity_t pong_ws = dds_create_waitset(pp.handle());
@@ -165,7 +166,7 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   const auto ping_pong = [&](int count, double gap_s, std::vector<double>& one_way_us) {
     for (int i = 0; i < count + 50; ++i) {
       msg.sequence_number = ++sequence;
-      msg.stamp_s = monotonic_now_s();
+      msg.stamp_s = swivel::monotonic_s();
       dds_write(ping, &msg);
       bool got = false;
       while (!got) {
@@ -173,7 +174,7 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
         void* samples[4] = {nullptr};
         dds_sample_info_t infos[4];
         const dds_return_t n = dds_take(pong, samples, infos, 4, 4);
-        const double now = monotonic_now_s();
+        const double now = swivel::monotonic_s();
         for (dds_return_t k = 0; k < n; ++k) {
           const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
           if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {

@@ -17,6 +17,7 @@
 #include "format.hpp"
 #include "request.hpp"
 #include "swivel.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::ctl {
@@ -99,7 +100,7 @@ int run_drive(double vx, double vy, double wz, double for_s, double rate_hz,
   std::string id = robot;
   command.robot_id = id.data();
   auto send = [&](double x, double y, double z) {
-    command.stamp_s = dds::monotonic_now_s();
+    command.stamp_s = swivel::monotonic_s();
     ++command.sequence_number;
     command.vx_mps = x;
     command.vy_mps = y;

@@ -17,6 +17,7 @@
 
 #include "ros2_interfaces.h"
 #include "swivel.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
@@ -354,7 +355,7 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
     // ROS 2 stamps are system (Unix) time: carry the snapshot's age over to it.
     timespec real{};
     clock_gettime(CLOCK_REALTIME, &real);
-    const double age_s = std::max(0.0, monotonic_now_s() - s.stamp_s);
+    const double age_s = std::max(0.0, monotonic_s() - s.stamp_s);
     const double stamp = static_cast<double>(real.tv_sec) +
                          1e-9 * static_cast<double>(real.tv_nsec) - age_s;
     const double sec = std::floor(stamp);
@@ -388,7 +389,7 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
 void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   swivel_msg_Diagnostics msg{};
   msg.robot_id = c_str(robot_id_);
-  msg.stamp_s = monotonic_now_s();
+  msg.stamp_s = monotonic_s();
   msg.uptime_s = d.uptime_s;
   msg.loop_rate_hz = d.loop_rate_hz;
   msg.measured_rate_hz = d.measured_rate_hz;
@@ -422,7 +423,7 @@ void DdsBridge::publish_calibration(const CalibrationSample& sample) {
   }
   swivel_msg_CalibrationResult msg{};
   msg.robot_id = c_str(robot_id_);
-  msg.stamp_s = monotonic_now_s();
+  msg.stamp_s = monotonic_s();
   msg.status = c_str(sample.status);
   msg.progress = sample.progress;
   msg.text = c_str(sample.text);
@@ -480,7 +481,7 @@ void DdsBridge::subscribe_loop(const std::stop_token& stop) {
 void DdsBridge::deliver_command(const Twist2& twist) {
   VelocityCommand command;
   command.twist = twist;
-  command.received_s = monotonic_now_s();
+  command.received_s = monotonic_s();
   command.sequence = ++next_command_sequence_;
   if (callbacks_.on_command && callbacks_.on_command(command)) {
     commands_received_.fetch_add(1, std::memory_order_relaxed);
@@ -515,7 +516,7 @@ void DdsBridge::take_motion_capture() {
         if (m.robot_id == nullptr || robot_id_ != m.robot_id) return;
         MotionCaptureSample sample;
         sample.valid = true;
-        sample.stamp_s = m.stamp_s > 0.0 ? m.stamp_s : monotonic_now_s();
+        sample.stamp_s = m.stamp_s > 0.0 ? m.stamp_s : monotonic_s();
         sample.pose = {m.x_m, m.y_m, m.yaw_rad};
         if (callbacks_.on_motion_capture && callbacks_.on_motion_capture(sample)) {
           motion_captures_received_.fetch_add(1, std::memory_order_relaxed);

@@ -1,6 +1,5 @@
 #include "swivel/dds/topics.hpp"
 
-#include <time.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -87,12 +86,6 @@ ResolvedConfig resolve_config(const std::string& file_uri) {
 std::string tool_config_uri() { return resolve_config().uri; }
 
 std::string describe_tool_config() { return resolve_config().description; }
-
-double monotonic_now_s() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 dds_entity_t create_topic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
                           const char* name) {

@@ -15,6 +15,7 @@
 
 #include "calibration_runner.hpp"
 #include "config_watcher.hpp"
+#include "swivel/clock.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
@@ -153,12 +154,6 @@ timespec to_timespec(double seconds) {
 
 }  // namespace
 
-double monotonic_now_s() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
 struct Daemon::Recorder {
   std::unique_ptr<RunLogWriter> writer;
   std::string path;
@@ -227,7 +222,7 @@ void Daemon::start() {
   }
   hardware_active_ = true;
   spdlog::info("hardware {} activated", config_.hardware.plugin);
-  start_s_ = monotonic_now_s();
+  start_s_ = monotonic_s();
   std::set<std::string> seen;
   for (const auto& warning : loop_->start()) {
     if (seen.insert(warning).second) spdlog::warn("{}", warning);
@@ -405,8 +400,8 @@ dds::ReplySample Daemon::handle_request(const dds::RequestSample& request) {
 
 bool Daemon::wait_for_loop_reply(std::uint64_t id, rt::LoopReply& out) {
   // The loop answers at its next cycle; a second covers a stalled or very slow loop.
-  const double deadline_s = monotonic_now_s() + 1.0;
-  while (monotonic_now_s() < deadline_s && loop_->running()) {
+  const double deadline_s = monotonic_s() + 1.0;
+  while (monotonic_s() < deadline_s && loop_->running()) {
     if (loop_->take_reply(out) && out.id == id) return true;
     std::this_thread::sleep_for(std::chrono::microseconds(500));
   }
@@ -555,7 +550,7 @@ dds::DiagnosticsSample Daemon::read_diagnostics() {
   dds::DiagnosticsSample d;
   const auto timing = loop_->timing();
   const StateSnapshot s = loop_->latest();
-  const double now = monotonic_now_s();
+  const double now = monotonic_s();
   d.uptime_s = now - start_s_;
   d.loop_rate_hz = 1.0 / loop_->period_s();
   if (rate_window_s_ > 0.0 && now > rate_window_s_) {
@@ -589,7 +584,7 @@ dds::DiagnosticsSample Daemon::read_diagnostics() {
 // while the loop runs; waits until the robot stands still, or a bound on the ramp's time.
 void Daemon::bring_to_rest() noexcept {
   if (!loop_ || !loop_->running()) return;
-  loop_->request_controlled_stop(monotonic_now_s());  // no-op when the signal asked already
+  loop_->request_controlled_stop(monotonic_s());  // no-op when the signal asked already
   try {
     const StateSnapshot from = loop_->latest();
     const MotionLimits& limits = config_.robot.limits;
@@ -606,7 +601,7 @@ void Daemon::bring_to_rest() noexcept {
     spdlog::info("stopping: bringing the robot to rest from vx={:.3f} m/s vy={:.3f} m/s "
                  "wz={:.3f} rad/s (controlled stop at {} m/s^2, {} rad/s^2)",
                  v.vx_mps, v.vy_mps, v.wz_radps, a_linear, a_angular);
-    const double start_s = monotonic_now_s();
+    const double start_s = monotonic_s();
     for (;;) {
       const StateSnapshot s = loop_->latest();
       const Twist2& c = s.command_twist;
@@ -625,7 +620,7 @@ void Daemon::bring_to_rest() noexcept {
         }
         return;
       }
-      if (monotonic_now_s() - start_s > limit_s || !loop_->running()) {
+      if (monotonic_s() - start_s > limit_s || !loop_->running()) {
         spdlog::error("the robot did not come to rest within {:.2f} s; stopping the loop anyway "
                       "(zero setpoints at once)",
                       limit_s);
@@ -721,7 +716,7 @@ void Daemon::run_script(const std::stop_token& stop) {
   std::uint64_t sequence = 0;
   std::unique_lock lock(mutex);
   while (!stop.stop_requested()) {
-    const double now = monotonic_now_s();
+    const double now = monotonic_s();
     double into_s = std::fmod(now - start_s_, total_s);
     std::size_t i = 0;
     while (i + 1 < script.size() && into_s >= script[i].duration_s) {
@@ -875,10 +870,10 @@ ReloadResult Daemon::reload(const std::string& trigger) {
         throw PluginError("the loop refused the localization swap (one is still pending)");
       }
       // The loop takes it, or rolls it back, at its next cycle boundary.
-      const double deadline = monotonic_now_s() + 2.0;
+      const double deadline = monotonic_s() + 2.0;
       std::string refusal;
       SwapResult swapped = SwapResult::kPending;
-      while (swapped == SwapResult::kPending && monotonic_now_s() < deadline) {
+      while (swapped == SwapResult::kPending && monotonic_s() < deadline) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
         swapped = collect_retired_localization(&refusal);
       }
@@ -938,12 +933,12 @@ void Daemon::send_watchdog_if_healthy() {
 
 int Daemon::run_until_signal(const sigset_t& signals) {
   constexpr double kTickS = 0.05;  // reload requests and retired instances are handled this often
-  double next_status_s = monotonic_now_s() + status_period_s_;
+  double next_status_s = monotonic_s() + status_period_s_;
   const double watchdog_period_s =
       watchdog_interval_ ? static_cast<double>(watchdog_interval_->count()) * 1e-6 / 2.0 : 0.0;
-  double next_watchdog_s = monotonic_now_s();
+  double next_watchdog_s = monotonic_s();
   for (;;) {
-    const double now = monotonic_now_s();
+    const double now = monotonic_s();
     if (watchdog_interval_ && now >= next_watchdog_s) {
       send_watchdog_if_healthy();
       next_watchdog_s = now + watchdog_period_s;
@@ -954,8 +949,8 @@ int Daemon::run_until_signal(const sigset_t& signals) {
     (void)collect_retired_localization();
     process_requests();
     poll_calibration();
-    double wait_s = std::min(kTickS, next_status_s - monotonic_now_s());
-    if (watchdog_interval_) wait_s = std::min(wait_s, next_watchdog_s - monotonic_now_s());
+    double wait_s = std::min(kTickS, next_status_s - monotonic_s());
+    if (watchdog_interval_) wait_s = std::min(wait_s, next_watchdog_s - monotonic_s());
     const timespec timeout = to_timespec(std::max(0.0, wait_s));
     const int signal = sigtimedwait(&signals, nullptr, &timeout);
     if (signal == SIGHUP) {
@@ -964,14 +959,14 @@ int Daemon::run_until_signal(const sigset_t& signals) {
       // Stop first: the loop starts bringing the robot to rest in its next cycle, before
       // anything else is torn down (stop() does the rest).
       stopping_.store(true, std::memory_order_release);
-      if (loop_) loop_->request_controlled_stop(monotonic_now_s());
+      if (loop_) loop_->request_controlled_stop(monotonic_s());
       return signal;
     }
-    if (monotonic_now_s() >= next_status_s) {
+    if (monotonic_s() >= next_status_s) {
       std::fputs((status_line() + "\n").c_str(), stdout);
       std::fflush(stdout);
       next_status_s += status_period_s_;
-      if (next_status_s < monotonic_now_s()) next_status_s = monotonic_now_s() + status_period_s_;
+      if (next_status_s < monotonic_s()) next_status_s = monotonic_s() + status_period_s_;
     }
   }
 }

@@ -20,16 +20,6 @@ std::string errno_text(int error) {
 
 }  // namespace
 
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
-}
-
-double monotonic_s() noexcept {
-  return static_cast<double>(monotonic_ns()) * 1e-9;
-}
-
 timespec to_timespec(std::int64_t ns) noexcept {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(ns / kNsPerS);

@@ -2,7 +2,6 @@
 
 #include <sys/socket.h>
 #include <sys/un.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -13,6 +12,8 @@
 #include <stdexcept>
 #include <system_error>
 #include <utility>
+
+#include "swivel/clock.hpp"
 
 namespace swivel::service {
 
@@ -87,10 +88,7 @@ bool Notifier::ready(std::string_view status) const {
 }
 
 bool Notifier::reloading(std::string_view status) const {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  const auto usec = static_cast<unsigned long long>(now.tv_sec) * 1000000ull +
-                    static_cast<unsigned long long>(now.tv_nsec) / 1000ull;
+  const auto usec = static_cast<unsigned long long>(monotonic_ns() / 1000);
   return notify(with_status("RELOADING=1\nMONOTONIC_USEC=" + std::to_string(usec), status));
 }
 

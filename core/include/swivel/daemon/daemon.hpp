@@ -60,9 +60,6 @@ namespace swivel::daemon {
 class CalibrationRunner;
 class ConfigWatcher;
 
-/// Monotonic time in seconds (CLOCK_MONOTONIC, the loop's clock).
-double monotonic_now_s() noexcept;
-
 /// What the command line adds to the configuration file.
 struct DaemonOptions {
   std::string record_path;        ///< run log (CSV) to record; "" records nothing

@@ -90,9 +90,6 @@ std::string tool_config_uri();
 /// resolve_config("").description, for --help and errors.
 std::string describe_tool_config();
 
-/// CLOCK_MONOTONIC in seconds: the clock of the real-time loop and of every stamp_s.
-double monotonic_now_s() noexcept;
-
 /// Creates a topic of `descriptor` named `name`. @throws DdsError
 dds_entity_t create_topic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
                           const char* name);

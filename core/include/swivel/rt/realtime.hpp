@@ -10,13 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "swivel/clock.hpp"
+
 namespace swivel::rt {
-
-/// CLOCK_MONOTONIC now, nanoseconds. Real-time safe (vDSO, no system call on Linux).
-std::int64_t monotonic_ns() noexcept;
-
-/// CLOCK_MONOTONIC now, seconds. Real-time safe.
-double monotonic_s() noexcept;
 
 /// Real-time safe. Nanoseconds since the clock's epoch as a timespec.
 timespec to_timespec(std::int64_t ns) noexcept;

@@ -1,17 +1,11 @@
 #include "swivel/dynamixel/bus.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cstring>
 
-namespace swivel::dynamixel {
+#include "swivel/clock.hpp"
 
-double monotonic_s() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+namespace swivel::dynamixel {
 
 const char* bus_result_text(BusResult result) noexcept {
   switch (result) {

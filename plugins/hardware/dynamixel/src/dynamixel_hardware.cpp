@@ -10,6 +10,7 @@
 #include <numbers>
 #include <system_error>
 
+#include "swivel/clock.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
 #include "swivel/dynamixel/protocol.hpp"
@@ -298,7 +299,7 @@ Status DynamixelHardware::activate() {
   ActuatorCommand zero{};
   zero.module_count = module_count_;
   commands_.publish(zero);
-  reading_.stamp_s = dxl::monotonic_s();
+  reading_.stamp_s = swivel::monotonic_s();
   reading_.sample_s = reading_.stamp_s;
   cycles_without_reading_ = 0;
   stop_.store(false, std::memory_order_release);
@@ -355,10 +356,10 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
   const std::span<const std::uint8_t> ids(all_ids_);
   // The statuses of the Sync Read: 11 bytes of frame and 8 of data each, 10 bits a byte.
   const double status_wire_s = static_cast<double>(19 * ids.size()) * 10.0 / baud_;
-  double last_s = dxl::monotonic_s();
+  double last_s = swivel::monotonic_s();
   double next_s = last_s;
   while (!stop_.load(std::memory_order_acquire)) {
-    const double start_s = dxl::monotonic_s();
+    const double start_s = swivel::monotonic_s();
     const double dt = std::clamp(start_s - last_s, 0.0, 0.1);
     last_s = start_s;
     commands_.take(command);
@@ -382,7 +383,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     }
     ok = ok && (steer_ids_.empty() || bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
                                                      {data.data(), 4 * steer_ids_.size()}));
-    const double request_s = dxl::monotonic_s();
+    const double request_s = swivel::monotonic_s();
     ok = ok && bus.sync_read(dxl::address::kPresentVelocity, 8, ids, replies, reply_timeout_s_);
     if (!ok && r.fault == FaultKind::kNone) r.fault = FaultKind::kPort;
     for (std::size_t i = 0; ok && i < ids.size(); ++i) {
@@ -420,7 +421,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
         r.hardware_error = bits;
       }
     }
-    const double end_s = dxl::monotonic_s();
+    const double end_s = swivel::monotonic_s();
     ++r.cycle;
     r.stamp_s = end_s;
     // A servo samples its present values when it takes the request and the last status

@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "swivel/clock.hpp"
 #include "swivel/dynamixel/bus.hpp"
 
 namespace swivel::dynamixel {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <thread>
 
+#include "swivel/clock.hpp"
 #include "swivel/dynamixel/bus.hpp"
 #include "swivel/dynamixel/emulator.hpp"
 #include "swivel/dynamixel/serial_port.hpp"
@@ -175,9 +176,9 @@ TEST(DynamixelBus, TimedWireTakesTheBytesTime) {
   port.open(emulator.port(), 57600);
   dxl::Bus bus(port);
   std::array<dxl::SyncReply, 8> replies{};
-  const double start = dxl::monotonic_s();
+  const double start = swivel::monotonic_s();
   ASSERT_TRUE(bus.sync_read(dxl::address::kPresentVelocity, 8, o.ids, replies, 0.5));
-  const double took = dxl::monotonic_s() - start;
+  const double took = swivel::monotonic_s() - start;
   for (const auto& r : replies) EXPECT_EQ(r.result, dxl::BusResult::kOk);
   // Request 22 bytes + 8 replies of 19 bytes = 174 bytes of 10 bits at 57600 bit/s.
   EXPECT_GT(took, 174 * 10.0 / 57600 * 0.95);

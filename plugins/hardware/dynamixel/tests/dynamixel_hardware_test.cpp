@@ -14,6 +14,7 @@
 
 #include "alloc_guard.hpp"
 #include "dynamixel_hardware.hpp"
+#include "swivel/clock.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/dynamixel/bus.hpp"
 #include "swivel/dynamixel/emulator.hpp"
@@ -74,8 +75,8 @@ std::string diff_params(const std::string& port, const std::string& extra = "") 
 // the loop's; returns the last status and state (stops at the first kError).
 Status run(DynamixelHardware& hw, const ActuatorCommand& command, double seconds,
            HardwareState& state) {
-  const double start = dxl::monotonic_s();
-  for (double now = start; now - start < seconds; now = dxl::monotonic_s()) {
+  const double start = swivel::monotonic_s();
+  for (double now = start; now - start < seconds; now = swivel::monotonic_s()) {
     if (hw.read(now, state) != Status::kOk) return Status::kError;
     if (hw.write(command) != Status::kOk) return Status::kError;
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -271,7 +272,7 @@ TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   EXPECT_EQ(emulator.goal_velocity(1), 0) << "the bus thread stops the wheels itself";
   // The fault stays until a clear; the clear names the servo while it is still silent.
-  EXPECT_EQ(hw.read(dxl::monotonic_s(), s), Status::kError);
+  EXPECT_EQ(hw.read(swivel::monotonic_s(), s), Status::kError);
   EXPECT_EQ(hw.activate(), Status::kError);
   EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): does not answer a ping");
   emulator.set_silent(2, false);
@@ -312,9 +313,9 @@ TEST(DynamixelHardware, ABusThreadThatPublishesNothingIsStale) {
   ASSERT_EQ(hw.activate(), Status::kOk);
   emulator.set_reply_delay(2, 0.6);
   HardwareState s;
-  const double start = dxl::monotonic_s();
+  const double start = swivel::monotonic_s();
   ASSERT_EQ(run(hw, wheels(0.0, 0.0), 3.0, s), Status::kError);
-  const double took = dxl::monotonic_s() - start;
+  const double took = swivel::monotonic_s() - start;
   EXPECT_STREQ(hw.last_error(), "dynamixel: bus thread published nothing for stale_timeout_s");
   EXPECT_LT(took, 0.6) << "before the late reply came";
   emulator.set_reply_delay(2, 0.0);
@@ -384,21 +385,21 @@ TEST(DynamixelHardware, ReadAndWriteDoNotTouchTheHeap) {
   {
     swivel::test::AllocCounter counter;
     for (int i = 0; i < 300; ++i) {
-      (void)hw.read(dxl::monotonic_s(), s);
+      (void)hw.read(swivel::monotonic_s(), s);
       (void)hw.write(c);
       usleep(500);
     }
     emulator.set_silent(1, true);  // the fault path too
-    const double start = dxl::monotonic_s();
-    while (dxl::monotonic_s() - start < 3.0) {
-      const Status status = hw.read(dxl::monotonic_s(), s);
+    const double start = swivel::monotonic_s();
+    while (swivel::monotonic_s() - start < 3.0) {
+      const Status status = hw.read(swivel::monotonic_s(), s);
       (void)hw.write(c);
       if (status != Status::kOk) break;
       usleep(500);
     }
     counts = counter.counts();
   }
-  EXPECT_EQ(hw.read(dxl::monotonic_s(), s), Status::kError);
+  EXPECT_EQ(hw.read(swivel::monotonic_s(), s), Status::kError);
   EXPECT_EQ(counts.allocations, 0U);
   EXPECT_EQ(counts.deallocations, 0U);
   emulator.set_silent(1, false);

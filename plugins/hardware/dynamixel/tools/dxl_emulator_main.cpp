@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "swivel/clock.hpp"
 #include "swivel/dynamixel/bus.hpp"
 #include "swivel/dynamixel/emulator.hpp"
 
@@ -92,10 +93,10 @@ int main(int argc, char** argv) {
     }
     std::printf("%s\n", emulator.port().c_str());
     std::fflush(stdout);
-    const double start_s = swivel::dynamixel::monotonic_s();
+    const double start_s = swivel::monotonic_s();
     while (g_stop == 0) {
       usleep(10000);
-      const double t = swivel::dynamixel::monotonic_s() - start_s;
+      const double t = swivel::monotonic_s() - start_s;
       for (Fault& f : faults) {
         if (f.applied || t < f.start_s) continue;
         f.applied = true;

@@ -64,7 +64,4 @@ class Bus {
   std::uint64_t crc_errors_ = 0;
 };
 
-/// CLOCK_MONOTONIC in seconds.
-double monotonic_s() noexcept;
-
 }  // namespace swivel::dynamixel
