@@ -26,6 +26,7 @@
 #include "gnuplot.hpp"
 #include "swivel/stats/summary.hpp"
 #include "swivel/robot_model_io.hpp"
+#include "swivel/shipped_config.hpp"
 
 namespace swivel::lab {
 namespace {
@@ -55,7 +56,8 @@ constexpr std::array<double, 2> kPaperMaxReductionPct{60.19, 68.83};
 constexpr double kPaperAdvantageOverLcakfPct = 4.85;
 
 struct DocentCommandOptions {
-  std::string model_file = "config/robots/docent.yaml";
+  // The repository's model for a build-tree binary, the installed one otherwise.
+  std::string model_file = shipped_config_file("robots/docent.yaml").string();
   std::size_t runs = 5;
   bool runs_given = false;
   std::uint64_t seed = 1;

@@ -3,9 +3,10 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <filesystem>
 #include <mutex>
 #include <set>
+
+#include "swivel/shipped_config.hpp"
 
 namespace swivel::dds {
 
@@ -43,18 +44,6 @@ void ensure_domain(std::uint32_t domain_id, const std::string& config_uri) {
   created.insert(domain_id);
 }
 
-bool is_under(const std::filesystem::path& path, const std::filesystem::path& dir) {
-  const auto rel = path.lexically_relative(dir);
-  return !rel.empty() && *rel.begin() != "..";
-}
-
-std::string loopback_path() {
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec && is_under(exe, SWIVEL_DDS_BUILD_DIR)) return SWIVEL_DDS_SOURCE_LOOPBACK;
-  return SWIVEL_DDS_INSTALLED_LOOPBACK;
-}
-
 }  // namespace
 
 QosPtr default_qos(int depth) { return make_qos(depth, DDS_RELIABILITY_RELIABLE); }
@@ -79,7 +68,7 @@ ResolvedConfig resolve_config(const std::string& file_uri) {
     return {"", description + ")"};
   }
   if (!file_uri.empty()) return {file_uri, "dds.config " + file_uri + " (CYCLONEDDS_URI unset)"};
-  const std::string loopback = "file://" + loopback_path();
+  const std::string loopback = "file://" + shipped_config_file("dds/loopback.xml").string();
   return {loopback, loopback + " (CYCLONEDDS_URI unset)"};
 }
 

@@ -196,6 +196,20 @@ TEST_F(ReproduceDocentTest, SameSeedGivesIdenticalResultsAndAnotherSeedDoesNot) 
   EXPECT_NE(summary(other, 0, "eg", "mean_max_error_m"), summary(*first_, 0, "eg", "mean_max_error_m"));
 }
 
+TEST_F(ReproduceDocentTest, FindsTheRepositoryModelFromAnyWorkingDirectory) {
+  ASSERT_EQ(first_->status, 0) << first_->out;
+  // No --model, run from a directory with no config/ in it: the default model is the
+  // repository's config/robots/docent.yaml, so the same seed gives the same results.
+  const fs::path dir = root_ / "elsewhere";
+  fs::create_directories(dir);
+  const std::string cmd = "cd " + dir.string() + " && " + SWIVEL_LAB_EXE +
+                          " reproduce docent --short --seed 7 --out out >run.out 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0) << read_text(dir / "run.out");
+  const json results = json::parse(read_text(dir / "out" / "results.json"));
+  EXPECT_EQ(results.at("scenarios"), first_->results.at("scenarios"));
+}
+
 TEST_F(ReproduceDocentTest, RejectsANonDifferentialRobot) {
   const fs::path model = root_ / "swpc.yaml";
   fs::copy_file(source_dir() + "/config/robots/swpc4.yaml", model,
