@@ -21,6 +21,7 @@
 #include "hardware_bench.hpp"
 #endif
 #include "swap_bench.hpp"
+#include "swivel/cli/command_line.hpp"
 #include "swivel/rt/control_loop.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/timing_stats.hpp"
@@ -220,7 +221,7 @@ int main(int argc, char** argv) {
                        "directory with docent.yaml and swpc4.yaml")
       ->check(CLI::ExistingDirectory);
 #endif
-  CLI11_PARSE(app, argc, argv);
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench")) return *exit;
   try {
     if (swap->parsed()) return swivel::bench::run_swap(swap_settings);
 #ifdef SWIVEL_BENCH_HARDWARE

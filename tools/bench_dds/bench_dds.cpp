@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "swivel.h"
+#include "swivel/cli/command_line.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
@@ -238,7 +239,7 @@ int main(int argc, char** argv) {
   app.add_option("--rate-hz", rate_hz, "publish rate, Hz")->capture_default_str();
   app.add_option("--seconds", seconds, "state measurement window, s")->capture_default_str();
   app.add_option("--pings", pings, "ping-pong round trips")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench-dds")) return *exit;
   try {
     return server ? swivel::dds::run_server(robot, rate_hz)
                   : swivel::dds::run_client(robot, rate_hz, seconds, pings);

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <string>
 
+#include "swivel/cli/command_line.hpp"
+
 #define SWIVEL_LAB_COMMAND(name) void add_##name##_command(CLI::App& app, int& exit_code);
 namespace swivel::lab {
 #include "commands.inc"
@@ -20,9 +22,8 @@ int main(int argc, char** argv) {
 #include "commands.inc"
 #undef SWIVEL_LAB_COMMAND
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // The subcommands run from their callbacks, inside parse().
+    if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-lab")) return *exit;
   } catch (const std::exception& e) {
     std::string where = "swivel-lab";
     for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();

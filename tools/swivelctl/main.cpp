@@ -17,6 +17,7 @@
 #include "format.hpp"
 #include "request.hpp"
 #include "swivel.h"
+#include "swivel/cli/command_line.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
 
@@ -332,14 +333,14 @@ int main(int argc, char** argv) {
 
   add_calibrate_command(app);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivelctl")) return *exit;
   install_signal_handlers();
   try {
     if (*echo) return run_echo(what, common, count, json);
     if (*drive) {
       if (!std::isfinite(vx) || !std::isfinite(vy) || !std::isfinite(wz)) {
         std::cerr << "swivelctl: velocities must be finite\n";
-        return 2;
+        return swivel::cli::kUsageError;
       }
       return run_drive(vx, vy, wz, for_s, rate_hz, common);
     }
@@ -350,13 +351,13 @@ int main(int argc, char** argv) {
       if (!std::isfinite(pose.pose.x_m) || !std::isfinite(pose.pose.y_m) ||
           !std::isfinite(pose.pose.yaw_rad)) {
         std::cerr << "swivelctl: x, y and yaw must be finite\n";
-        return 2;
+        return swivel::cli::kUsageError;
       }
       if (!sigma.empty()) {
         for (const double s : sigma) {
           if (!std::isfinite(s) || s < 0.0) {
             std::cerr << "swivelctl: --sigma: standard deviations must be finite and >= 0\n";
-            return 2;
+            return swivel::cli::kUsageError;
           }
         }
         pose.has_sigma = true;
@@ -370,5 +371,5 @@ int main(int argc, char** argv) {
     std::cerr << "swivelctl: " << e.what() << '\n';
     return 1;
   }
-  return 2;
+  return swivel::cli::kUsageError;
 }

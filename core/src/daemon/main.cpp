@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <string>
 
+#include "swivel/cli/command_line.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/daemon/daemon.hpp"
 #include "swivel/daemon/daemon_config.hpp"
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.1, 10000.0))
       ->capture_default_str();
   app.add_flag("!--no-dds", options.dds, "do not start the DDS bridge");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swiveld")) return *exit;
 
   // Block the stop and reload signals before any thread exists so that every thread inherits the mask
   // and only run_until_signal() receives them (no work in a signal handler).

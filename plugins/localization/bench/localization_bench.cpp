@@ -141,5 +141,3 @@ BENCHMARK(BM_LsmPaper);
 BENCHMARK(BM_LsmPaperEveryCycle);
 BENCHMARK(BM_LsmHeadingAligned);
 BENCHMARK(BM_DifferentialForwardInverse);
-
-BENCHMARK_MAIN();

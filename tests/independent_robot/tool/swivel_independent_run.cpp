@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "swivel/cli/command_line.hpp"
 #include "swivel/independent/battery.hpp"
 #include "swivel/independent/generator.hpp"
 #include "swivel/independent/library_effects.hpp"
@@ -21,7 +22,7 @@ namespace {
 
 using namespace swivel::independent;
 
-constexpr int kUsageError = 2;
+constexpr int kUsageError = swivel::cli::kUsageError;
 constexpr int kWriteError = 1;
 
 class UsageError : public std::runtime_error {
@@ -168,13 +169,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", o.out, "run log (CSV) to write");
   app.add_option("--model-out", o.model_out, "nominal robot model (YAML) to write");
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    (void)app.exit(e);
-    return kUsageError;
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-independent-run")) {
+    return *exit;
   }
 
   if (o.list) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "battery_scoring.hpp"
+#include "swivel/cli/command_line.hpp"
 
 namespace {
 
@@ -134,10 +135,8 @@ int main(int argc, char** argv) {
   app.add_flag("--battery", whole, "run the whole independent battery");
   app.add_flag("--subset", subset, "with --battery: only the representative subset");
   app.add_option("--case", ids, "with --battery: only this case (repeatable)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench-model-gap")) {
+    return *exit;
   }
   std::vector<BatteryCase> cases;
   if (!ids.empty()) {
@@ -145,7 +144,7 @@ int main(int argc, char** argv) {
       const BatteryCase* c = swivel::independent::find_case(id);
       if (c == nullptr) {
         std::fprintf(stderr, "swivel-bench-model-gap: no battery case '%s' (swivel-independent-run --list)\n", id.c_str());
-        return 2;
+        return swivel::cli::kUsageError;
       }
       cases.push_back(*c);
     }

@@ -50,5 +50,3 @@ void BM_MonteCarloTrial(benchmark::State& state) {
 BENCHMARK(BM_MonteCarloTrial)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-
-BENCHMARK_MAIN();

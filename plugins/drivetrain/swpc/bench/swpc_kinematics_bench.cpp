@@ -76,4 +76,3 @@ void bm_forward(benchmark::State& state) {
 
 BENCHMARK(bm_inverse)->Arg(4)->Arg(16);
 BENCHMARK(bm_forward)->Arg(4)->Arg(16);
-BENCHMARK_MAIN();

@@ -11,6 +11,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "swivel/cli/command_line.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dynamixel/bus.hpp"
 #include "swivel/dynamixel/emulator.hpp"
@@ -39,48 +41,45 @@ int usage() {
   std::fputs("usage: swivel-dxl-emulator --ids 1,2 [--baud N] [--link PATH] "
              "[--fault silence|crc|hwerror|slow:ID:START_S ...]\n",
              stderr);
-  return 2;
+  return swivel::cli::kUsageError;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"swivel-dxl-emulator: a DYNAMIXEL X-series bus on a pseudo-terminal"};
   swivel::dynamixel::Emulator::Options options;
   options.ids.clear();
+  std::string ids;
   std::string link;
+  std::vector<std::string> fault_args;
+  app.add_option("--ids", ids, "servo IDs, comma-separated, e.g. 1,2")->required();
+  app.add_option("--baud", options.baud, "baud rate")->capture_default_str();
+  app.add_option("--link", link, "make PATH a symbolic link to the device");
+  app.add_option("--fault", fault_args,
+                 "KIND:ID:START_S (silence, crc, hwerror, slow), repeatable");
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-dxl-emulator")) return *exit;
+  for (std::size_t at = 0; at < ids.size();) {
+    const std::size_t comma = ids.find(',', at);
+    const std::string item = ids.substr(at, comma - at);
+    const int id = std::atoi(item.c_str());
+    if (id < 0 || id > swivel::dynamixel::kMaxId) return usage();
+    options.ids.push_back(static_cast<std::uint8_t>(id));
+    at = comma == std::string::npos ? ids.size() : comma + 1;
+  }
   std::vector<Fault> faults;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) return usage();
-    const std::string value = argv[++i];
-    if (arg == "--ids") {
-      for (std::size_t at = 0; at < value.size();) {
-        const std::size_t comma = value.find(',', at);
-        const std::string item = value.substr(at, comma - at);
-        const int id = std::atoi(item.c_str());
-        if (id < 0 || id > swivel::dynamixel::kMaxId) return usage();
-        options.ids.push_back(static_cast<std::uint8_t>(id));
-        at = comma == std::string::npos ? value.size() : comma + 1;
-      }
-    } else if (arg == "--baud") {
-      options.baud = static_cast<std::uint32_t>(std::strtoul(value.c_str(), nullptr, 10));
-    } else if (arg == "--link") {
-      link = value;
-    } else if (arg == "--fault") {
-      Fault f;
-      const std::size_t a = value.find(':');
-      const std::size_t b = a == std::string::npos ? a : value.find(':', a + 1);
-      if (b == std::string::npos) return usage();
-      f.kind = value.substr(0, a);
-      f.id = static_cast<std::uint8_t>(std::atoi(value.substr(a + 1, b - a - 1).c_str()));
-      f.start_s = std::atof(value.substr(b + 1).c_str());
-      if (f.kind != "silence" && f.kind != "crc" && f.kind != "hwerror" && f.kind != "slow") {
-        return usage();
-      }
-      faults.push_back(f);
-    } else {
+  for (const std::string& value : fault_args) {
+    Fault f;
+    const std::size_t a = value.find(':');
+    const std::size_t b = a == std::string::npos ? a : value.find(':', a + 1);
+    if (b == std::string::npos) return usage();
+    f.kind = value.substr(0, a);
+    f.id = static_cast<std::uint8_t>(std::atoi(value.substr(a + 1, b - a - 1).c_str()));
+    f.start_s = std::atof(value.substr(b + 1).c_str());
+    if (f.kind != "silence" && f.kind != "crc" && f.kind != "hwerror" && f.kind != "slow") {
       return usage();
     }
+    faults.push_back(f);
   }
   if (options.ids.empty()) return usage();
   signal(SIGINT, on_signal);

@@ -1,0 +1,62 @@
+// Every Swivel executable answers --version with the project's version and exits 2 on a
+// usage error, whatever library parses its command line (CLI11 or Google Benchmark).
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "process_util.hpp"
+#include "swivel/version.hpp"
+
+namespace swivel::test {
+namespace {
+
+std::vector<std::string> executables() {
+  std::vector<std::string> paths;
+  std::istringstream in(SWIVEL_EXECUTABLES);
+  for (std::string path; std::getline(in, path, ':');) {
+    if (!path.empty()) paths.push_back(path);
+  }
+  return paths;
+}
+
+ToolRun run(const std::string& exe, const std::vector<std::string>& args) {
+  Child child(exe, args);
+  ToolRun result;
+  result.exit_code = child.exit_code(Seconds(20));
+  result.out = child.out();
+  result.err = child.err();
+  return result;
+}
+
+TEST(Executables, AllAreTested) {
+  // swiveld, swivelctl, swivel-lab, swivel-bench and the other benchmarks at least.
+  EXPECT_GE(executables().size(), 4u) << SWIVEL_EXECUTABLES;
+}
+
+TEST(Executables, VersionPrintsTheProjectVersion) {
+  for (const auto& exe : executables()) {
+    const std::string name = std::filesystem::path(exe).filename().string();
+    const ToolRun r = run(exe, {"--version"});
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    EXPECT_EQ(r.out, version_line(name) + "\n") << name;
+    EXPECT_EQ(r.out.rfind(name + " " + SWIVEL_EXPECTED_VERSION, 0), 0u) << r.out;
+  }
+}
+
+TEST(Executables, AnUnknownOptionIsAUsageError) {
+  for (const auto& exe : executables()) {
+    const std::string name = std::filesystem::path(exe).filename().string();
+    const ToolRun r = run(exe, {"--no-such-option"});
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.out << r.err;
+    // CLI11 may report a missing required option or subcommand first; either way it says why.
+    EXPECT_NE(r.err, "") << name;
+    EXPECT_EQ(r.out.find("Usage"), std::string::npos) << name << " printed its help instead";
+  }
+}
+
+}  // namespace
+}  // namespace swivel::test
