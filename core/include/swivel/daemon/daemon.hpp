@@ -23,6 +23,15 @@
 //    one. Progress and results go out as CalibrationResult samples; without a calibration
 //    section every calibrate request is refused with the reason.
 //
+// Each of these jobs is a type of its own in core/src/daemon/, which this class wires
+// together: plugin_set (creating and configuring plugins, at start-up and on reload),
+// reload_plan (what a new configuration changes: a pure function), localization_swap (the
+// hot swap), request_router (the DDS request queue and its verbs), loop_requests (clear and
+// set-pose through the loop), calibration_service (calibrate and the runner's polling),
+// script_source (the built-in command source), run_recorder (--record), diagnostics (the
+// Diagnostics sample), service_integration (sd_notify, watchdog, status line),
+// controlled_stop and hardware_lifecycle (shutdown).
+//
 // Hardware lifecycle (swivel/plugin/hardware.hpp): configure() in the constructor,
 // activate() in start() before the loop's first cycle, deactivate() in stop() after its
 // last. On SIGTERM/SIGINT stop() stops the robot first: no more commands, a controlled stop
@@ -32,14 +41,8 @@
 #include <signal.h>
 
 #include <atomic>
-#include <chrono>
-#include <deque>
 #include <memory>
-#include <mutex>
-#include <optional>
 #include <string>
-#include <thread>
-#include <variant>
 
 #include "swivel/daemon/daemon_config.hpp"
 #include "swivel/dds/bridge.hpp"
@@ -48,17 +51,24 @@
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/plugin_loader.hpp"
-#include "swivel/service/sd_notify.hpp"
 
 namespace swivel::rt {
 class ControlLoop;
-struct LoopReply;
 }
 
 namespace swivel::daemon {
 
-class CalibrationRunner;
+class CalibrationService;
 class ConfigWatcher;
+class DiagnosticsSource;
+class LocalizationSwap;
+class LoopRequests;
+class ReloadRecord;
+class RequestQueue;
+class RunRecorder;
+class ScriptCommandSource;
+class ServiceIntegration;
+struct RequestHandlers;
 
 /// What the command line adds to the configuration file.
 struct DaemonOptions {
@@ -135,72 +145,38 @@ class Daemon {
   dds::ReplySample set_pose(const dds::SetPoseSample& request);
 
  private:
-  using PendingRequest = std::variant<dds::RequestSample, dds::SetPoseSample>;
-
-  void queue_request(PendingRequest request);
-  void process_requests();
-  dds::ReplySample clear_fault(std::uint64_t request_id);
-  dds::ReplySample calibrate(const std::string& argument);
-  bool wait_for_loop_reply(std::uint64_t id, rt::LoopReply& out);
-  void bring_to_rest() noexcept;
-  void deactivate_hardware() noexcept;
-  void run_script(const std::stop_token& stop);
-  void run_recorder(const std::stop_token& stop);
   void start_bridge();
-  dds::DiagnosticsSample read_diagnostics();
-  /// What the loop did with the instance handed over in a swap, once it let go of one.
-  enum class SwapResult { kPending, kTaken, kRefused };
-  SwapResult collect_retired_localization(std::string* refusal = nullptr) noexcept;
-  void send_watchdog_if_healthy();
-  void poll_calibration() noexcept;
   void publish_calibration(const dds::CalibrationSample& sample) noexcept;
-  [[nodiscard]] std::string calibration_refusal() const;
+  void publish_reply(const dds::ReplySample& reply);
 
+  // Declared in the order they must outlive one another (stop() tears down explicitly, in
+  // the order it documents): the loop uses the plugins, the threads around it use the loop,
+  // the DDS bridge's callbacks use the request queue and the reload record.
   DaemonConfig config_;  // the configuration in effect (main thread writes, on reload)
   DaemonOptions options_;
   dds::DdsOptions dds_options_;
   std::string robot_model_text_;  // to tell a changed model apart on reload
+  std::unique_ptr<ServiceIntegration> service_;
+  std::unique_ptr<ReloadRecord> reloads_;
+  std::unique_ptr<RequestQueue> requests_;     // subscriber thread -> main thread
+  std::unique_ptr<RequestHandlers> handlers_;  // who answers each verb (main thread)
   PluginLoader loader_;
   PluginInstance<Hardware> hardware_;
   PluginInstance<Drivetrain> drivetrain_;
-  PluginInstance<Localization> localization_;  // the instance the loop uses
-  // Handed to the loop in a swap and not retired or taken yet; `incoming_slot_` is its
-  // configuration, which becomes config_.localization once the loop has taken it.
-  PluginInstance<Localization> incoming_;
-  PluginConfig incoming_slot_;
+  std::unique_ptr<LocalizationSwap> localization_;  // the loop's instance and a swap in flight
+  std::unique_ptr<RunRecorder> recorder_;
   std::unique_ptr<rt::ControlLoop> loop_;
+  std::unique_ptr<LoopRequests> loop_requests_;
+  std::unique_ptr<DiagnosticsSource> diagnostics_;  // publisher thread
   std::unique_ptr<dds::DdsBridge> bridge_;
-  std::unique_ptr<CalibrationRunner> calibration_;  // null without `calibration:`
-  std::string calibration_logged_;  // last status logged (under the runner's mutex)
+  std::unique_ptr<CalibrationService> calibration_;
   std::unique_ptr<ConfigWatcher> watcher_;
-  std::jthread command_thread_;
-  std::jthread recorder_thread_;
-  struct Recorder;
-  std::unique_ptr<Recorder> recorder_;
-  service::Notifier notifier_;
-  std::optional<std::chrono::microseconds> watchdog_interval_;
-  std::uint64_t watchdog_cycle_ = 0;
+  std::unique_ptr<ScriptCommandSource> script_;
   double start_s_ = 0.0;
   double status_period_s_ = 1.0;
   std::atomic<bool> reload_requested_{false};
   std::atomic<bool> stopping_{false};  // stop() began: no more commands or requests
   bool hardware_active_ = false;       // activate() succeeded, deactivate() not yet called
-  std::uint64_t loop_request_id_ = 0;  // main thread: ids of requests to the loop
-
-  // Requests from the subscriber thread, answered by the main thread.
-  std::mutex requests_mutex_;
-  std::deque<PendingRequest> pending_requests_;
-
-  // Reload outcome for Diagnostics (publisher thread reads, main thread writes).
-  mutable std::mutex reload_mutex_;
-  std::uint32_t reload_count_ = 0;
-  ReloadResult last_reload_{true, false, ""};
-  bool restart_required_ = false;
-
-  // Measured-rate window (publisher thread only).
-  double rate_window_s_ = 0.0;
-  std::uint64_t rate_window_cycles_ = 0;
-  double measured_rate_hz_ = 0.0;
 };
 
 }  // namespace swivel::daemon
