@@ -1,0 +1,126 @@
+// The reload plan: what a changed configuration applies live and what waits for a restart,
+// computed from two configurations alone (no plugin, loop or process).
+
+#include "reload_plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace swivel::daemon {
+namespace {
+
+const std::string kConfigDir = SWIVEL_SOURCE_DIR "/config";
+
+std::string shipped_text() {
+  std::ifstream in(kConfigDir + "/swiveld.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The shipped configuration with `from` replaced by `to` (which must occur once).
+DaemonConfig edited(const std::string& from, const std::string& to) {
+  std::string text = shipped_text();
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return parse_daemon_config(text, "swiveld.yaml", kConfigDir);
+}
+
+DaemonConfig shipped() {
+  return parse_daemon_config(shipped_text(), "swiveld.yaml", kConfigDir);
+}
+
+const std::string kModel = "name: docent\n";
+
+ReloadPlan plan_for(const DaemonConfig& fresh, const std::string& fresh_model = kModel) {
+  return plan_reload(shipped(), kModel, fresh, fresh_model);
+}
+
+TEST(ReloadPlan, AnUnchangedConfigurationChangesNothing) {
+  const ReloadPlan plan = plan_for(shipped());
+  EXPECT_TRUE(plan.restart.empty());
+  EXPECT_TRUE(plan.no_live_change());
+  EXPECT_EQ(describe_reload({}, plan.restart), "no live change");
+}
+
+TEST(ReloadPlan, ALocalizationChangeIsSwappedLive) {
+  const ReloadPlan plugin = plan_for(edited("plugin: raw_eg", "plugin: kalman"));
+  EXPECT_TRUE(plugin.swap_localization);
+  EXPECT_TRUE(plugin.restart.empty());
+
+  // New parameters of the same plugin are a swap as well.
+  const ReloadPlan params = plan_for(edited("heading_source: gyro ", "heading_source: encoders "));
+  EXPECT_TRUE(params.swap_localization);
+  EXPECT_TRUE(params.restart.empty());
+}
+
+TEST(ReloadPlan, LogLevelAndStatusPeriodApplyLive) {
+  const ReloadPlan level = plan_for(edited("level: info", "level: debug"));
+  ASSERT_TRUE(level.log_level.has_value());
+  EXPECT_EQ(*level.log_level, "debug");
+  EXPECT_FALSE(level.status_period_s.has_value());
+
+  const ReloadPlan period = plan_for(edited("period_s: 0.5", "period_s: 2"));
+  ASSERT_TRUE(period.status_period_s.has_value());
+  EXPECT_DOUBLE_EQ(*period.status_period_s, 2.0);
+  EXPECT_FALSE(period.swap_localization);
+  EXPECT_TRUE(period.restart.empty());
+}
+
+TEST(ReloadPlan, EachRestartSettingIsNamed) {
+  const std::vector<std::pair<std::pair<std::string, std::string>, std::string>> cases = {
+      {{"rate_hz: 1000", "rate_hz: 500"}, "loop.rate_hz"},
+      {{"fifo_priority: 80", "fifo_priority: 70"}, "loop.fifo_priority"},
+      {{"realtime: true", "realtime: false"}, "loop.realtime"},
+      {{"seed: 1 ", "seed: 2 "}, "hardware"},
+      {{"max_wheel_rate_radps: 20.0", "max_wheel_rate_radps: 15.0"}, "drivetrain"},
+      {{"timeout_s: 0.5", "timeout_s: 0.25"}, "command"},
+      {{"source: script ", "source: none "}, "command"},
+      {{"duration_s: 3.333}", "duration_s: 3.0}"}, "command"},
+      {{"linear_deceleration_mps2: 1.0", "linear_deceleration_mps2: 2.0"}, "controlled_stop"},
+      {{"angular_deceleration_radps2: 2.0", "angular_deceleration_radps2: 3.0"}, "controlled_stop"},
+      {{"domain_id: 0 ", "domain_id: 7 "}, "dds"},
+      {{"enabled: false", "enabled: true"}, "dds"},
+      {{"robot_model:", "plugin_path: [/nonexistent]\nrobot_model:"}, "plugin_path"},
+      {{"robot_model:", "calibration: {plugin: swpc_geometric}\nrobot_model:"}, "calibration"},
+  };
+  for (const auto& [edit, name] : cases) {
+    const ReloadPlan plan = plan_for(edited(edit.first, edit.second));
+    EXPECT_EQ(plan.restart, std::vector<std::string>{name}) << edit.second;
+    EXPECT_TRUE(plan.no_live_change()) << edit.second;
+  }
+}
+
+TEST(ReloadPlan, AnEditedRobotModelFileNeedsARestartUnderTheSamePath) {
+  EXPECT_EQ(plan_for(shipped(), "name: docent\n# edited\n").restart,
+            std::vector<std::string>{"robot_model"});
+  EXPECT_EQ(
+      plan_for(edited("robot_model: robots/docent.yaml", "robot_model: robots/swpc4.yaml")).restart,
+      std::vector<std::string>{"robot_model"});
+}
+
+TEST(ReloadPlan, LiveAndRestartChangesAreReportedTogetherInReferenceOrder) {
+  std::string text = shipped_text();
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"plugin: raw_eg", "plugin: lsm"},
+                                                        {"domain_id: 0 ", "domain_id: 3 "},
+                                                        {"rate_hz: 1000", "rate_hz: 250"},
+                                                        {"level: info", "level: warn"}}) {
+    text.replace(text.find(from), from.size(), to);
+  }
+  const ReloadPlan plan = plan_for(parse_daemon_config(text, "swiveld.yaml", kConfigDir));
+  EXPECT_TRUE(plan.swap_localization);
+  EXPECT_EQ(plan.log_level, "warn");
+  EXPECT_EQ(plan.restart, (std::vector<std::string>{"loop.rate_hz", "dds"}));
+  EXPECT_EQ(describe_reload({"localization raw_eg -> lsm", "logging.level warn"}, plan.restart),
+            "applied localization raw_eg -> lsm, logging.level warn; needs a restart: "
+            "loop.rate_hz, dds");
+}
+
+}  // namespace
+}  // namespace swivel::daemon
