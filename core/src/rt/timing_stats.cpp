@@ -1,6 +1,7 @@
 #include "swivel/rt/timing_stats.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace swivel::rt {
@@ -13,11 +14,34 @@ void bump(std::atomic<std::uint64_t>& counter) noexcept {
 
 }  // namespace
 
+// Above the linear range, a duration of `us` microseconds with its highest bit at `e`
+// (2^e <= us < 2^(e+1), e >= 11) falls in sub-bucket (us >> (e - 6)) - 64 of doubling e - 11.
+constexpr unsigned kLinearBits = 11;  // 2^11 = kLinearBuckets
+constexpr unsigned kSubBits = 6;      // 2^6 = kSubBuckets
+static_assert(LatencyHistogram::kLinearBuckets == 1u << kLinearBits);
+static_assert(LatencyHistogram::kSubBuckets == 1u << kSubBits);
+
+std::size_t LatencyHistogram::bucket_of(std::uint64_t us) noexcept {
+  if (us < kLinearBuckets) return static_cast<std::size_t>(us);
+  const auto e = static_cast<unsigned>(std::bit_width(us) - 1);
+  const std::size_t doubling = e - kLinearBits;
+  if (doubling >= kDoublings) return kBucketCount;  // overflow
+  const std::size_t sub = static_cast<std::size_t>(us >> (e - kSubBits)) - kSubBuckets;
+  return kLinearBuckets + doubling * kSubBuckets + sub;
+}
+
+double LatencyHistogram::upper_edge_us(std::size_t bucket) noexcept {
+  if (bucket < kLinearBuckets) return static_cast<double>(bucket + 1);
+  const std::size_t j = bucket - kLinearBuckets;
+  const std::size_t doubling = j / kSubBuckets;
+  const std::size_t sub = j % kSubBuckets;
+  const auto width = static_cast<double>(std::uint64_t{1} << (doubling + kLinearBits - kSubBits));
+  return static_cast<double>(kSubBuckets + sub + 1) * width;
+}
+
 void LatencyHistogram::record(std::int64_t duration_ns) noexcept {
   const std::int64_t ns = std::max<std::int64_t>(duration_ns, 0);
-  const auto bucket =
-      std::min<std::uint64_t>(static_cast<std::uint64_t>(ns / kBucketWidthNs), kBucketCount);
-  bump(buckets_[bucket]);
+  bump(buckets_[bucket_of(static_cast<std::uint64_t>(ns / kBucketWidthNs))]);
   if (ns > max_ns_.load(std::memory_order_relaxed)) {
     max_ns_.store(ns, std::memory_order_relaxed);
   }
@@ -45,12 +69,22 @@ double LatencyHistogram::percentile_us(double fraction) const noexcept {
   std::uint64_t seen = 0;
   for (std::size_t i = 0; i < kBucketCount; ++i) {
     seen += buckets_[i].load(std::memory_order_relaxed);
-    if (seen >= rank) {
-      const double upper_us = static_cast<double>(i + 1) * kBucketWidthNs / 1000.0;
-      return std::min(upper_us, max_us());
-    }
+    if (seen >= rank) return std::min(upper_edge_us(i), max_us());
   }
   return max_us();
+}
+
+void LatencyHistogram::add(const LatencyHistogram& other) noexcept {
+  for (std::size_t i = 0; i < buckets_.size(); ++i) {
+    buckets_[i].store(buckets_[i].load(std::memory_order_relaxed) +
+                          other.buckets_[i].load(std::memory_order_relaxed),
+                      std::memory_order_relaxed);
+  }
+  count_.store(count_.load(std::memory_order_relaxed) + other.count(), std::memory_order_relaxed);
+  const std::int64_t other_max = other.max_ns_.load(std::memory_order_relaxed);
+  if (other_max > max_ns_.load(std::memory_order_relaxed)) {
+    max_ns_.store(other_max, std::memory_order_relaxed);
+  }
 }
 
 void LatencyHistogram::reset() noexcept {

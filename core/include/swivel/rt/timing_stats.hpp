@@ -9,12 +9,18 @@
 
 namespace swivel::rt {
 
-/// Histogram of durations with 1 us buckets from 0 to 2 ms and one overflow bucket; the exact
-/// maximum is kept alongside. One writer thread, any number of readers.
+/// Histogram of durations: 1 us buckets up to 2.048 ms, then log-spaced buckets (64 per
+/// doubling, 1/64 = 1.6 % wide) up to 16.8 s, and one overflow bucket beyond; the exact
+/// maximum is kept alongside. So the tail a loop shows under a hypervisor (milliseconds) is
+/// resolved rather than reported as the maximum. One writer thread, any number of readers.
 class LatencyHistogram {
  public:
-  static constexpr std::int64_t kBucketWidthNs = 1000;
-  static constexpr std::size_t kBucketCount = 2000;  ///< regular buckets; one more overflows
+  static constexpr std::int64_t kBucketWidthNs = 1000;  ///< of the linear buckets
+  static constexpr std::size_t kLinearBuckets = 2048;    ///< [0, 2.048 ms) in 1 us steps
+  static constexpr std::size_t kSubBuckets = 64;         ///< per doubling above that
+  static constexpr std::size_t kDoublings = 13;          ///< 2.048 ms * 2^13 = 16.8 s
+  static constexpr std::size_t kBucketCount =
+      kLinearBuckets + kDoublings * kSubBuckets;  ///< regular buckets; one more overflows
 
   /// Writer only. Real-time safe (relaxed atomics, no allocation). Negative values count as 0.
   void record(std::int64_t duration_ns) noexcept;
@@ -29,6 +35,13 @@ class LatencyHistogram {
 
   /// Any thread. Real-time safe. Largest sample, microseconds (exact, not bucketed).
   [[nodiscard]] double max_us() const noexcept;
+
+  /// Not concurrent with record() on this histogram. Adds `other`'s samples (and maximum).
+  void add(const LatencyHistogram& other) noexcept;
+
+  /// Bucket index of a duration (microseconds, whole) and the upper edge of a bucket (us).
+  [[nodiscard]] static std::size_t bucket_of(std::uint64_t us) noexcept;
+  [[nodiscard]] static double upper_edge_us(std::size_t bucket) noexcept;
 
   /// Not concurrent with record(). Empties the histogram.
   void reset() noexcept;
