@@ -6,6 +6,25 @@
 #include <vector>
 
 namespace swivel::stats {
+namespace {
+
+double sorted_quantile(const std::vector<double>& sorted, double q) {
+  const double rank = q * static_cast<double>(sorted.size() - 1);
+  const auto below = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  const double fraction = rank - static_cast<double>(below);
+  return sorted[below] + fraction * (sorted[above] - sorted[below]);
+}
+
+}  // namespace
+
+double quantile(std::span<const double> values, double q) {
+  if (values.empty()) throw std::invalid_argument("quantile: no values");
+  if (!(q >= 0.0 && q <= 1.0)) throw std::invalid_argument("quantile: q outside [0, 1]");
+  std::vector<double> sorted(values.begin(), values.end());
+  std::sort(sorted.begin(), sorted.end());
+  return sorted_quantile(sorted, q);
+}
 
 Summary summarize(std::span<const double> values) {
   if (values.empty()) throw std::invalid_argument("summarize: no values");
@@ -27,6 +46,8 @@ Summary summarize(std::span<const double> values) {
   s.max = sorted.back();
   const std::size_t mid = s.count / 2;
   s.median = s.count % 2 == 1 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
+  s.lower_quartile = sorted_quantile(sorted, 0.25);
+  s.upper_quartile = sorted_quantile(sorted, 0.75);
   return s;
 }
 

@@ -25,6 +25,26 @@ TEST(SummaryTest, MeanSpreadAndOrderStatisticsOfASmallSample) {
   EXPECT_DOUBLE_EQ(s.max, 4.0);
 }
 
+TEST(SummaryTest, QuartilesInterpolateBetweenOrderStatistics) {
+  // Sorted 1..9 (n = 9): q (n - 1) = 2 and 6 are exact ranks; 1..8 (n = 8): 1.75 and 5.25.
+  const std::vector<double> nine = {9, 1, 8, 2, 7, 3, 6, 4, 5};
+  const Summary s9 = summarize(nine);
+  EXPECT_DOUBLE_EQ(s9.lower_quartile, 3.0);
+  EXPECT_DOUBLE_EQ(s9.upper_quartile, 7.0);
+  const std::vector<double> eight = {8, 1, 7, 2, 6, 3, 5, 4};
+  const Summary s8 = summarize(eight);
+  EXPECT_DOUBLE_EQ(s8.lower_quartile, 2.75);
+  EXPECT_DOUBLE_EQ(s8.upper_quartile, 6.25);
+  EXPECT_DOUBLE_EQ(quantile(eight, 0.5), s8.median);
+  EXPECT_DOUBLE_EQ(quantile(eight, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(quantile(eight, 1.0), 8.0);
+  EXPECT_DOUBLE_EQ(quantile(eight, 0.9), 7.3);  // rank 6.3: 7 + 0.3 (8 - 7)
+  const std::vector<double> one = {7.0};
+  EXPECT_DOUBLE_EQ(quantile(one, 0.25), 7.0);
+  EXPECT_THROW(quantile(eight, 1.5), std::invalid_argument);
+  EXPECT_THROW(quantile(std::vector<double>{}, 0.5), std::invalid_argument);
+}
+
 TEST(SummaryTest, OddCountMedianAndASingleValueHasNoSpread) {
   const std::vector<double> odd = {5.0, -1.0, 2.0};
   EXPECT_DOUBLE_EQ(summarize(odd).median, 2.0);

@@ -21,7 +21,9 @@ struct Summary {
   double standard_deviation = 0.0;  ///< sample (n - 1); 0 for fewer than two values
   double standard_error = 0.0;      ///< standard_deviation / sqrt(count)
   double min = 0.0;
+  double lower_quartile = 0.0;  ///< quantile(0.25)
   double median = 0.0;
+  double upper_quartile = 0.0;  ///< quantile(0.75)
   double max = 0.0;
 
   [[nodiscard]] Estimate mean_estimate() const { return {mean, standard_error}; }
@@ -29,6 +31,12 @@ struct Summary {
 
 /// @throws std::invalid_argument for an empty sample.
 Summary summarize(std::span<const double> values);
+
+/// The `q` quantile (0 <= q <= 1) of a sample, interpolated linearly between order
+/// statistics at rank q (n - 1) (Hyndman and Fan's type 7, R's and NumPy's default): 0 is the
+/// minimum, 0.5 the median, 1 the maximum.
+/// @throws std::invalid_argument for an empty sample or q outside [0, 1].
+double quantile(std::span<const double> values, double q);
 
 /// The average of independent estimates (e.g. the means of equal-sized strata): the mean of
 /// the values, its standard error sqrt(sum se^2) / n. @throws std::invalid_argument if empty.
