@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <span>
 #include <stdexcept>
 #include <system_error>
@@ -90,7 +91,42 @@ MotionLimits stop_limits(const LoopOptions& options) {
 constexpr double kFollowFloorMps = 0.02;
 constexpr double kFollowFloorRadps = 0.02;
 
+TwistWindowOptions twist_window_options(const LoopOptions& options) {
+  TwistWindowOptions o;
+  o.readings = twist_window_readings(options);
+  o.wheel_resolution_rad = options.wheel_encoder_resolution_rad;
+  o.steer_resolution_rad = options.steer_encoder_resolution_rad;
+  return o;
+}
+
 }  // namespace
+
+std::size_t twist_window_readings(const LoopOptions& options) {
+  // An invalid rate is the constructor's to report.
+  if (!std::isfinite(options.rate_hz) || !(options.rate_hz > 0.0)) return 2;
+  const double periods = options.twist_window_s * options.rate_hz;
+  if (!std::isfinite(periods) || !(options.twist_window_s > 0.0) ||
+      periods > static_cast<double>(kMaxTwistWindowReadings - 1)) {
+    throw std::invalid_argument(
+        "twist_window_s must be finite, positive and at most " +
+        std::to_string(kMaxTwistWindowReadings - 1) + " loop periods, got " +
+        std::to_string(options.twist_window_s) + " s at " + std::to_string(options.rate_hz) +
+        " Hz");
+  }
+  return std::max<std::size_t>(2, static_cast<std::size_t>(std::llround(periods)) + 1);
+}
+
+void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept {
+  const SensorParams& sensors = robot.sensors;
+  options.wheel_encoder_resolution_rad =
+      sensors.wheel_encoder_counts_per_rev > 0
+          ? 2.0 * std::numbers::pi / sensors.wheel_encoder_counts_per_rev
+          : 0.0;
+  options.steer_encoder_resolution_rad =
+      robot.drivetrain == DrivetrainKind::kSwpc && sensors.steering_encoder_counts_per_rev > 0
+          ? 2.0 * std::numbers::pi / sensors.steering_encoder_counts_per_rev
+          : 0.0;
+}
 
 ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
                          Localization& localization, const char* localization_name)
@@ -103,6 +139,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       active_localization_(&localization),
       timing_(1.0 / options.rate_hz),
       odometry_monitor_(options.odometry_check),
+      twist_window_(twist_window_options(options)),
       command_limiter_(options.limits),
       stop_limiter_(stop_limits(options)) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
@@ -625,6 +662,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     ++state_.cycle;
     state_.stamp_s = now_s;
     state_.odometry_twist = Twist2{};
+    state_.has_twist_covariance = false;
+    state_.twist_covariance = {};
     state_.command_twist = Twist2{};
     snapshot_.write(state_);
     last_cycle_s_ = now_s;
@@ -684,13 +723,25 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     current_.motion_capture = newest_sample;
   }
 
-  // Odometry and localization.
+  // Odometry and localization. The twist window goes first: its forward kinematics calls
+  // leave the drivetrain's module states to the cycle's own call.
   OdometryIncrement odometry;
+  bool twist_ok = false;
+  if (reading_ok) {
+    if (!has_previous_) twist_window_.reset();
+    twist_window_.push(current_);
+  }
   if (reading_ok && has_previous_) {
+    // A refusal here is no fault: the cycle's own forward() below decides that.
+    twist_ok = guarded([&] { return twist_window_.estimate(drivetrain_, twist_estimate_); },
+                       thrown) == Status::kOk;
     if (guarded([&] { return drivetrain_.forward(previous_, current_, odometry); }, thrown) !=
         Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
                   thrown != nullptr ? thrown : drivetrain_.last_error());
+      // An encoder jump must not stay in the window once the fault is cleared.
+      twist_window_.reset();
+      twist_ok = false;
     } else if (guarded([&] { return localization.update(odometry, current_); }, thrown) !=
                Status::kOk) {
       raise_fault(FaultCode::kLocalizationError, now_s,
@@ -804,7 +855,15 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   ++state_.cycle;
   state_.stamp_s = now_s;
   state_.estimate = publishable(localization.estimate());
-  state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
+  if (twist_ok) {
+    state_.odometry_twist = twist_estimate_.twist;
+    state_.twist_covariance = twist_estimate_.covariance;
+    state_.has_twist_covariance = twist_estimate_.has_covariance;
+  } else {
+    state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
+    state_.twist_covariance = {};
+    state_.has_twist_covariance = false;
+  }
   state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
   state_.command_twist = applied;
   state_.gyro_wz_radps = reading_ok && current_.gyro_valid ? current_.gyro_wz_radps : 0.0;

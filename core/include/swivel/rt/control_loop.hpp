@@ -70,6 +70,7 @@
 #include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/rt/timing_stats.hpp"
+#include "swivel/rt/twist_window.hpp"
 
 namespace swivel::rt {
 
@@ -88,7 +89,25 @@ struct LoopOptions {
   /// daemon sets them from swiveld.yaml `controlled_stop:`.
   double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
   double stop_angular_deceleration_radps2 = std::numeric_limits<double>::infinity();
+  /// The published twist (StateSnapshot::odometry_twist) is fitted over the readings of the
+  /// last twist_window_s (N = twist_window_s * rate_hz + 1 readings, at most
+  /// kMaxTwistWindowReadings; one period gives the one-cycle difference): see TwistWindow.
+  /// It refers to twist_window_s / 2 before the cycle's reading.
+  double twist_window_s = 0.02;
+  /// One wheel and one steering encoder count, rad, for the twist covariance (0: unknown,
+  /// and then no covariance is published). The daemon takes them from the robot model.
+  double wheel_encoder_resolution_rad = 0.0;
+  double steer_encoder_resolution_rad = 0.0;
 };
+
+/// Readings in the twist window of `options` (TwistWindowOptions::readings).
+/// @throws std::invalid_argument when the window is not finite and positive or needs more
+///         than kMaxTwistWindowReadings readings.
+std::size_t twist_window_readings(const LoopOptions& options);
+
+/// Sets the encoder resolutions of `options` from the robot model's sensors (one count:
+/// 2 pi / counts per revolution; the steering only for an swpc robot).
+void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept;
 
 /// How a hot swap the loop took ended (take_retired_localization()).
 struct SwapOutcome {
@@ -358,6 +377,8 @@ class ControlLoop {
   FaultDetail latched_detail_{};                  // cause of latched_fault_
   FaultDetail transient_detail_{};                // cause of transient_fault_
   OdometryMonitor odometry_monitor_;
+  TwistWindow twist_window_;
+  TwistEstimate twist_estimate_{};
   motion::TwistLimiter command_limiter_;  // the robot model's limits
   motion::TwistLimiter stop_limiter_;     // the same, with the stop deceleration
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current

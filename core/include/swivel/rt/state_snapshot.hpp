@@ -66,7 +66,14 @@ struct StateSnapshot {
   std::uint64_t cycle = 0;
   double stamp_s = 0.0;          ///< monotonic time of the cycle's reading
   PoseEstimate estimate;         ///< localization output, world frame
-  Twist2 odometry_twist;         ///< body twist from forward kinematics, robot frame
+  /// Body twist from the encoders (the drivetrain's forward kinematics over the loop's
+  /// twist window, see TwistWindow), robot frame; it refers to half the window before
+  /// stamp_s.
+  Twist2 odometry_twist;
+  /// Covariance of odometry_twist from the encoders' quantization, row-major over (vx, vy,
+  /// wz): m^2/s^2, m rad/s^2, rad^2/s^2.
+  std::array<double, 9> twist_covariance{};
+  bool has_twist_covariance = false;
   Twist2 command_twist;          ///< twist applied this cycle after limits, robot frame
   double odometry_residual = 0.0;
   double gyro_wz_radps = 0.0;
