@@ -217,6 +217,8 @@ void Daemon::start() {
   loop_options.stop_linear_deceleration_mps2 = config_.controlled_stop.linear_deceleration_mps2;
   loop_options.stop_angular_deceleration_radps2 =
       config_.controlled_stop.angular_deceleration_radps2;
+  loop_options.twist_window_s = config_.twist_window_s;
+  rt::set_encoder_resolutions(config_.robot, loop_options);
   loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
                                             *localization_, config_.localization.plugin.c_str());
   // inactive -> active, off the loop and before its first cycle.
@@ -836,6 +838,7 @@ ReloadResult Daemon::reload(const std::string& trigger) {
             config_.controlled_stop.angular_deceleration_radps2) {
       restart.push_back("controlled_stop");
     }
+    if (fresh.twist_window_s != config_.twist_window_s) restart.push_back("odometry");
 
     std::vector<std::string> applied;
     const bool swap = !same_slot(fresh.localization, config_.localization);
