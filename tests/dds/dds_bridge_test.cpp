@@ -31,6 +31,8 @@ StateSnapshot sample_snapshot() {
   for (std::size_t i = 0; i < 9; ++i) s.estimate.covariance[i] = 0.1 * static_cast<double>(i + 1);
   s.estimate.has_covariance = true;
   s.odometry_twist = {0.2, -0.05, 0.1};
+  for (std::size_t i = 0; i < 9; ++i) s.twist_covariance[i] = 0.01 * static_cast<double>(i + 1);
+  s.has_twist_covariance = true;
   s.command_twist = {0.25, 0.0, 0.12};
   s.gyro_wz_radps = 0.11;
   s.module_count = 2;
@@ -108,6 +110,9 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   EXPECT_DOUBLE_EQ(got.vx_mps, 0.2);
   EXPECT_DOUBLE_EQ(got.vy_mps, -0.05);
   EXPECT_DOUBLE_EQ(got.wz_radps, 0.1);
+  EXPECT_TRUE(got.has_twist_covariance);
+  EXPECT_DOUBLE_EQ(got.twist_covariance[0], 0.01);
+  EXPECT_DOUBLE_EQ(got.twist_covariance[8], 0.09);
   EXPECT_DOUBLE_EQ(got.cmd_vx_mps, 0.25);
   EXPECT_DOUBLE_EQ(got.cmd_wz_radps, 0.12);
   EXPECT_DOUBLE_EQ(got.gyro_wz_radps, 0.11);

@@ -52,6 +52,8 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
                      s.estimate.has_covariance = true;
                      s.estimate.covariance = {1, 2, 3, 4, 5, 6, 7, 8, 9};
                      s.odometry_twist = {0.5, 0.1, -0.2};
+                     s.has_twist_covariance = true;
+                     s.twist_covariance = {11, 12, 13, 14, 15, 16, 17, 18, 19};
                      return true;
                    }});
   Participant client({0, tool_config_uri()});
@@ -93,6 +95,14 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.x, 0.5);
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.y, 0.1);
   EXPECT_DOUBLE_EQ(odom.twist.twist.angular.z, -0.2);
+  // (vx, vy, wz) on rows/columns (0, 1, 5) of the twist's 6x6 covariance.
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[0], 11.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[1], 12.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[5], 13.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[7], 15.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[30], 17.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[35], 19.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[14], 0.0);
 
   // What a ROS 2 node discovers: the type name and plain CDR only.
   dds_instance_handle_t publications[4];

@@ -52,6 +52,8 @@ nlohmann::json to_json(const swivel_msg_RobotState& s) {
       {"has_covariance", s.has_covariance},
       {"pose_covariance", std::vector<double>(s.pose_covariance, s.pose_covariance + 9)},
       {"twist", {{"vx_mps", s.vx_mps}, {"vy_mps", s.vy_mps}, {"wz_radps", s.wz_radps}}},
+      {"has_twist_covariance", s.has_twist_covariance},
+      {"twist_covariance", std::vector<double>(s.twist_covariance, s.twist_covariance + 9)},
       {"command", {{"vx_mps", s.cmd_vx_mps}, {"vy_mps", s.cmd_vy_mps}, {"wz_radps", s.cmd_wz_radps}}},
       {"gyro_wz_radps", s.gyro_wz_radps},
       {"odometry_residual", s.odometry_residual},

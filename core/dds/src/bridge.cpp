@@ -313,6 +313,8 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.vx_mps = s.odometry_twist.vx_mps;
   state.vy_mps = s.odometry_twist.vy_mps;
   state.wz_radps = s.odometry_twist.wz_radps;
+  state.has_twist_covariance = s.has_twist_covariance;
+  std::copy(s.twist_covariance.begin(), s.twist_covariance.end(), state.twist_covariance);
   state.cmd_vx_mps = s.command_twist.vx_mps;
   state.cmd_vy_mps = s.command_twist.vy_mps;
   state.cmd_wz_radps = s.command_twist.wz_radps;
@@ -381,6 +383,15 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
     odom.twist.twist.linear.x = s.odometry_twist.vx_mps;
     odom.twist.twist.linear.y = s.odometry_twist.vy_mps;
     odom.twist.twist.angular.z = s.odometry_twist.wz_radps;
+    if (s.has_twist_covariance) {
+      // (vx, vy, wz) sit at rows/columns (0, 1, 5) of ROS's 6x6 as well.
+      constexpr std::array<int, 3> kIndex{0, 1, 5};
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          odom.twist.covariance[kIndex[r] * 6 + kIndex[c]] = s.twist_covariance[r * 3 + c];
+        }
+      }
+    }
     check(dds_write(dds_->odom_writer, &odom), "dds_write(odom)");
   }
 }
