@@ -1,6 +1,7 @@
 #include "swivel/rt/control_loop.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <span>
@@ -150,6 +151,10 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
     throw std::invalid_argument("command timeout_s must be finite and positive, got " +
                                 std::to_string(options.command_timeout_s));
   }
+  if (!std::isfinite(options.clock_offset_refresh_s) || !(options.clock_offset_refresh_s > 0.0)) {
+    throw std::invalid_argument("clock_offset_refresh_s must be finite and positive, got " +
+                                std::to_string(options.clock_offset_refresh_s));
+  }
   if (!OdometryMonitor::valid(options.odometry_check)) {
     throw std::invalid_argument(
         "odometry_check: gyro_disagreement_radps, residual_limit_mps, filter_time_constant_s "
@@ -165,6 +170,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
   state_.estimate = localization.estimate();
+  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(state_.stamp_s);
   snapshot_.write(state_);
 }
 
@@ -183,6 +189,15 @@ std::vector<std::string> ControlLoop::start() {
   }
   stop_requested_.store(false, std::memory_order_release);
   log_.start();
+  const auto refresh = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.clock_offset_refresh_s));
+  clock_thread_ = std::jthread([this, refresh](const std::stop_token& stop) {
+    std::unique_lock lock(clock_mutex_);
+    while (!clock_wake_.wait_for(lock, stop, refresh, [] { return false; })) {
+      if (stop.stop_requested()) return;
+      clock_offset_.refresh();
+    }
+  });
   std::promise<std::string> scheduling;
   auto scheduling_warning = scheduling.get_future();
   running_.store(true, std::memory_order_release);
@@ -190,6 +205,7 @@ std::vector<std::string> ControlLoop::start() {
     thread_ = std::thread([this, &scheduling] { thread_main(scheduling); });
   } catch (...) {
     running_.store(false, std::memory_order_release);
+    clock_thread_ = std::jthread();  // requests its stop and joins
     log_.stop();
     dma_latency_.release();
     throw;
@@ -202,6 +218,8 @@ void ControlLoop::stop() noexcept {
   if (!thread_.joinable()) return;
   stop_requested_.store(true, std::memory_order_release);
   thread_.join();
+  clock_thread_.request_stop();
+  if (clock_thread_.joinable()) clock_thread_.join();
   log_.stop();
   dma_latency_.release();
   running_.store(false, std::memory_order_release);
@@ -661,6 +679,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     // Paused for a lifecycle call off the loop: no hardware call; the robot is stopped.
     ++state_.cycle;
     state_.stamp_s = now_s;
+    state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
     state_.odometry_twist = Twist2{};
     state_.has_twist_covariance = false;
     state_.twist_covariance = {};
@@ -854,6 +873,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   // Publish.
   ++state_.cycle;
   state_.stamp_s = now_s;
+  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
   state_.estimate = publishable(localization.estimate());
   if (twist_ok) {
     state_.odometry_twist = twist_estimate_.twist;

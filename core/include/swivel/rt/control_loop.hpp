@@ -50,8 +50,11 @@
 // now_s().
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <future>
+#include <mutex>
+#include <stop_token>
 #include <limits>
 #include <string>
 #include <thread>
@@ -62,6 +65,7 @@
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
+#include "swivel/rt/clock_offset.hpp"
 #include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/odometry_monitor.hpp"
 #include "swivel/rt/realtime.hpp"
@@ -98,6 +102,9 @@ struct LoopOptions {
   /// and then no covariance is published). The daemon takes them from the robot model.
   double wheel_encoder_resolution_rad = 0.0;
   double steer_encoder_resolution_rad = 0.0;
+  /// How often a non-real-time thread re-measures the offset of the realtime clock (ROS
+  /// time) from the loop's monotonic clock, s (see ClockOffset).
+  double clock_offset_refresh_s = 1.0;
 };
 
 /// Readings in the twist window of `options` (TwistWindowOptions::readings).
@@ -151,8 +158,8 @@ class ControlLoop {
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
 
-  /// Not real-time safe. Applies real-time settings where permitted, starts the log thread
-  /// and the loop thread, and returns one line per setting that was refused (the loop then
+  /// Not real-time safe. Applies real-time settings where permitted, starts the log thread,
+  /// the clock-offset thread and the loop thread, and returns one line per setting that was refused (the loop then
   /// runs SCHED_OTHER and/or without locked memory).
   /// @throws std::system_error when a thread cannot be created; std::logic_error when
   ///         already running.
@@ -289,6 +296,11 @@ class ControlLoop {
   /// Any thread. Real-time safe. CLOCK_MONOTONIC, seconds: the clock of `received_s`.
   [[nodiscard]] double now_s() const noexcept { return monotonic_s(); }
 
+  /// Any thread. The offset that maps the loop's stamps to ROS time
+  /// (StateSnapshot::ros_stamp_ns): measured at construction, refreshed every
+  /// clock_offset_refresh_s by a thread of its own while the loop runs.
+  [[nodiscard]] const ClockOffset& clock_offset() const noexcept { return clock_offset_; }
+
   /// Any thread. Real-time safe. The loop period, seconds.
   [[nodiscard]] double period_s() const noexcept { return period_s_; }
 
@@ -391,6 +403,10 @@ class ControlLoop {
   bool clear_pending_ = false;    // a request_clear() taken this cycle
 
   // Non-real-time ownership.
+  ClockOffset clock_offset_;
+  std::mutex clock_mutex_;
+  std::condition_variable_any clock_wake_;
+  std::jthread clock_thread_;
   std::thread thread_;
   CpuDmaLatencyRequest dma_latency_;
 };

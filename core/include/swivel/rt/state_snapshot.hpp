@@ -65,6 +65,9 @@ using FaultDetail = std::array<char, 64>;
 struct StateSnapshot {
   std::uint64_t cycle = 0;
   double stamp_s = 0.0;          ///< monotonic time of the cycle's reading
+  /// stamp_s in ROS time: CLOCK_REALTIME (Unix time), ns, through the loop's measured
+  /// offset of the realtime clock from the monotonic one (rt::ClockOffset).
+  std::int64_t ros_stamp_ns = 0;
   PoseEstimate estimate;         ///< localization output, world frame
   /// Body twist from the encoders (the drivetrain's forward kinematics over the loop's
   /// twist window, see TwistWindow), robot frame; it refers to half the window before
