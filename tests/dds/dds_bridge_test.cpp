@@ -27,6 +27,7 @@ using test::wait_for;
 StateSnapshot sample_snapshot() {
   StateSnapshot s;
   s.stamp_s = monotonic_now_s();
+  s.ros_stamp_ns = 1'700'000'000'250'000'001LL;
   s.estimate.pose = {1.5, -2.0, 0.3};
   for (std::size_t i = 0; i < 9; ++i) s.estimate.covariance[i] = 0.1 * static_cast<double>(i + 1);
   s.estimate.has_covariance = true;
@@ -101,6 +102,8 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   })) << "no RobotState within 10 s";
   EXPECT_GT(got.cycle, 0u);
   EXPECT_NEAR(got.stamp_s, monotonic_now_s(), 5.0);
+  EXPECT_EQ(got.ros_stamp_sec, 1'700'000'000);
+  EXPECT_EQ(got.ros_stamp_nanosec, 250'000'001U);
   EXPECT_DOUBLE_EQ(got.x_m, 1.5);
   EXPECT_DOUBLE_EQ(got.y_m, -2.0);
   EXPECT_DOUBLE_EQ(got.yaw_rad, 0.3);

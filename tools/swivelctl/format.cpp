@@ -48,6 +48,7 @@ nlohmann::json to_json(const swivel_msg_RobotState& s) {
       {"robot_id", str(s.robot_id)},
       {"cycle", s.cycle},
       {"stamp_s", s.stamp_s},
+      {"ros_stamp", {{"sec", s.ros_stamp_sec}, {"nanosec", s.ros_stamp_nanosec}}},
       {"pose", {{"x_m", s.x_m}, {"y_m", s.y_m}, {"yaw_rad", s.yaw_rad}}},
       {"has_covariance", s.has_covariance},
       {"pose_covariance", std::vector<double>(s.pose_covariance, s.pose_covariance + 9)},

@@ -18,6 +18,7 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/dds/topics.hpp"
+#include "swivel/rt/clock_offset.hpp"
 
 namespace swivel::dds {
 
@@ -305,6 +306,9 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.robot_id = c_str(robot_id_);
   state.cycle = s.cycle;
   state.stamp_s = s.stamp_s;
+  const rt::RosTime ros_stamp = rt::to_ros_time(s.ros_stamp_ns);
+  state.ros_stamp_sec = ros_stamp.sec;
+  state.ros_stamp_nanosec = ros_stamp.nanosec;
   state.x_m = s.estimate.pose.x_m;
   state.y_m = s.estimate.pose.y_m;
   state.yaw_rad = s.estimate.pose.yaw_rad;
@@ -353,18 +357,10 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   check(dds_write(dds_->modules_writer, &modules), "dds_write(module states)");
 
   if (dds_->odom_writer != 0) {
-    // ROS 2 stamps are system (Unix) time: carry the snapshot's age over to it.
-    timespec real{};
-    clock_gettime(CLOCK_REALTIME, &real);
-    const double age_s = std::max(0.0, monotonic_now_s() - s.stamp_s);
-    const double stamp = static_cast<double>(real.tv_sec) +
-                         1e-9 * static_cast<double>(real.tv_nsec) - age_s;
-    const double sec = std::floor(stamp);
-
+    // ROS time of the same instant as stamp_s, mapped by the loop (rt::ClockOffset).
     nav_msgs_msg_dds__Odometry_ odom{};
-    odom.header.stamp.sec = static_cast<std::int32_t>(sec);
-    odom.header.stamp.nanosec =
-        std::min(999999999u, static_cast<std::uint32_t>((stamp - sec) * 1e9));
+    odom.header.stamp.sec = ros_stamp.sec;
+    odom.header.stamp.nanosec = ros_stamp.nanosec;
     odom.header.frame_id = c_str(options_.ros2.odom_frame_id);
     odom.child_frame_id = c_str(options_.ros2.base_frame_id);
     odom.pose.pose.position.x = s.estimate.pose.x_m;
