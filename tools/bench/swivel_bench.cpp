@@ -88,6 +88,8 @@ void run_loop(const Settings& s, swivel::bench::Plugins& p, LoopResult& result) 
   options.rate_hz = s.rate_hz;
   options.fifo_priority = s.priority;
   options.realtime = s.realtime;
+  // As the daemon: the twist window's covariance runs its forward-kinematics calls.
+  if (p.real) swivel::rt::set_encoder_resolutions(p.robot, options);
   swivel::rt::ControlLoop loop(options, p.hw(), p.dt(), p.loc(), p.localization_name().c_str());
   result.warnings = loop.start();
   // A command source like the daemon's script: 50 Hz, driving a gentle curve.
