@@ -66,6 +66,10 @@ TEST(TwistWindow, FitsTheRatesOfLinearAnglesAcrossTheRingsWrap) {
   EXPECT_NEAR(out.delay_s, 10 * kDt, 1e-9);
   EXPECT_FALSE(out.has_covariance);  // no resolution given
   EXPECT_EQ(drivetrain.calls, 1);
+  EXPECT_NEAR(out.wheel_rate_radps[0], 4.0, 1e-9);
+  EXPECT_NEAR(out.wheel_rate_radps[1], -2.0, 1e-9);
+  EXPECT_NEAR(out.steer_rate_radps[0], 0.5, 1e-9);
+  EXPECT_EQ(out.wheel_rate_radps[2], 0.0);
 }
 
 TEST(TwistWindow, CovarianceIsTheQuantizationOfEachFittedRate) {

@@ -683,6 +683,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     state_.odometry_twist = Twist2{};
     state_.has_twist_covariance = false;
     state_.twist_covariance = {};
+    state_.has_joint_rates = false;
     state_.command_twist = Twist2{};
     snapshot_.write(state_);
     last_cycle_s_ = now_s;
@@ -879,10 +880,14 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     state_.odometry_twist = twist_estimate_.twist;
     state_.twist_covariance = twist_estimate_.covariance;
     state_.has_twist_covariance = twist_estimate_.has_covariance;
+    state_.wheel_rate_radps = twist_estimate_.wheel_rate_radps;
+    state_.steer_rate_radps = twist_estimate_.steer_rate_radps;
+    state_.has_joint_rates = true;
   } else {
     state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
     state_.twist_covariance = {};
     state_.has_twist_covariance = false;
+    state_.has_joint_rates = false;
   }
   state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
   state_.command_twist = applied;

@@ -131,6 +131,12 @@ Status TwistWindow::estimate(Drivetrain& drivetrain, TwistEstimate& out) {
   }
   out.has_covariance = wheel_sigma > 0.0 || steer_sigma > 0.0;
   out.delay_s = newest_s_ - t_c;
+  out.wheel_rate_radps = {};
+  out.steer_rate_radps = {};
+  for (std::uint32_t i = 0; i < module_count_; ++i) {
+    out.wheel_rate_radps[i] = slopes_[i];
+    out.steer_rate_radps[i] = slopes_[kMaxModules + i];
+  }
   out.readings = static_cast<std::uint32_t>(count_);
   return Status::kOk;
 }

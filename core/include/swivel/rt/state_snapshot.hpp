@@ -94,6 +94,11 @@ struct StateSnapshot {
   /// measured steering angles, rad, per module.
   std::array<double, kMaxModules> wheel_angle_rad{};
   std::array<double, kMaxModules> steer_angle_rad{};
+  /// The encoder rates behind odometry_twist: each module's wheel and steering rate, rad/s,
+  /// fitted over the twist window (they refer to its middle); valid with has_joint_rates.
+  std::array<double, kMaxModules> wheel_rate_radps{};
+  std::array<double, kMaxModules> steer_rate_radps{};
+  bool has_joint_rates = false;
   /// The hardware is in its error state: on_error() was called and no clear has succeeded
   /// since (a clear re-activates it first).
   bool hardware_in_error = false;

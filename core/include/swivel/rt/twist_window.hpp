@@ -51,6 +51,10 @@ struct TwistEstimate {
   bool has_covariance = false;
   double delay_s = 0.0;        ///< newest reading's stamp minus the window's centre time
   std::uint32_t readings = 0;  ///< readings the fit used
+  /// The fitted rate of every module's wheel and (unwrapped) steering angle, rad/s, at the
+  /// window's centre; modules beyond the readings' count are zero.
+  std::array<double, kMaxModules> wheel_rate_radps{};
+  std::array<double, kMaxModules> steer_rate_radps{};
 };
 
 class TwistWindow {
