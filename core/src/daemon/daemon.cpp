@@ -170,6 +170,7 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
       loader_(search_path(config_)),
       notifier_(service::Notifier::from_environment()) {
   dds_options_ = dds::parse_dds_options(config_.dds, config_.file, config_.config_dir);
+  dds::complete_joints(config_.robot, config_.file, dds_options_.ros2);
   robot_model_text_ = read_text(config_.robot_model_path);
   status_period_s_ = config_.status_period_s;
   hardware_ = create_plugin<Hardware>(loader_, config_.hardware);
@@ -312,8 +313,12 @@ void Daemon::start_bridge() {
                dds_options_.domain_id,
                dds::resolve_config(dds_options_.config_uri).description,
                dds_options_.publish_rate_hz,
-               dds_options_.ros2.enabled ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic()
-                                         : std::string());
+               dds_options_.ros2.enabled
+                   ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic() +
+                         (dds_options_.ros2.publish_tf ? ", " + dds_options_.ros2.tf_topic() : "") +
+                         ", " + dds_options_.ros2.joint_states_topic() + ", " +
+                         dds_options_.ros2.diagnostics_topic()
+                   : std::string());
 }
 
 std::string Daemon::calibration_refusal() const {
@@ -573,6 +578,7 @@ dds::DiagnosticsSample Daemon::read_diagnostics() {
   d.cycles = timing.cycles;
   d.overruns = timing.overruns;
   d.fault_count = s.fault_count;
+  d.mode = s.mode;
   d.fault = s.fault;
   d.fault_detail = s.fault_detail.data();
   // Hardware and drivetrain never change while running; the localization is the loop's.
@@ -812,7 +818,8 @@ ReloadResult Daemon::reload(const std::string& trigger) {
   PluginInstance<Localization> next;
   try {
     DaemonConfig fresh = load_daemon_config(config_.file);
-    (void)dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
+    dds::DdsOptions fresh_dds = dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
+    dds::complete_joints(fresh.robot, fresh.file, fresh_dds.ros2);
 
     std::vector<std::string> restart;
     if (fresh.rate_hz != config_.rate_hz) restart.push_back("loop.rate_hz");
