@@ -148,14 +148,14 @@ TEST_F(DaemonConfigTest, TwistWindowIsReadAndBoundedByTheLoopPeriod) {
       load(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.05}\nplugin_path:"));
   EXPECT_EQ(c.twist_window_s, 0.05);
   // loop.rate_hz is 500 here: 2 ms to 0.51 s.
-  EXPECT_EQ(error_of(replaced(kValid, "plugin_path:",
-                              "odometry: {twist_window_s: 0.001}\nplugin_path:")),
-            "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
-            "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.001");
-  EXPECT_EQ(error_of(replaced(kValid, "plugin_path:",
-                              "odometry: {twist_window_s: 0.6}\nplugin_path:")),
-            "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
-            "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.6");
+  EXPECT_EQ(
+      error_of(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.001}\nplugin_path:")),
+      "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
+      "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.001");
+  EXPECT_EQ(
+      error_of(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.6}\nplugin_path:")),
+      "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
+      "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.6");
 }
 
 TEST_F(DaemonConfigTest, CalibrationSectionIsOptionalAndValidated) {

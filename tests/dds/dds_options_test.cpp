@@ -1,5 +1,3 @@
-#include "swivel/dds/options.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -8,6 +6,7 @@
 #include <vector>
 
 #include "swivel/config/config_error.hpp"
+#include "swivel/dds/options.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {

@@ -144,8 +144,8 @@ TEST(Ros2Topics, PublishTfOffLeavesTheTransformToAnotherNode) {
                    }});
   Participant client({0, tool_config_uri()});
   const QosPtr qos = default_qos(10);
-  const dds_entity_t odom = make_reader(client, &nav_msgs_msg_dds__Odometry__desc,
-                                        options.ros2.odom_topic(), qos.get());
+  const dds_entity_t odom =
+      make_reader(client, &nav_msgs_msg_dds__Odometry__desc, options.ros2.odom_topic(), qos.get());
   bridge.start();
   ASSERT_TRUE(wait_for([&] { return take_one<nav_msgs_msg_dds__Odometry_>(odom, [](auto&) {}); }))
       << "no odometry within 10 s";
@@ -210,9 +210,9 @@ TEST(Ros2Topics, PublishesJointStatesForRobotStatePublisher) {
   };
   // Until the loop has fitted rates, positions only (ROS allows an empty velocity array).
   const Joints first = next();
-  ASSERT_EQ(first.name, (std::vector<std::string>{"module_1_wheel_joint", "module_2_wheel_joint",
-                                                  "module_1_steering_joint",
-                                                  "module_2_steering_joint"}));
+  ASSERT_EQ(first.name,
+            (std::vector<std::string>{"module_1_wheel_joint", "module_2_wheel_joint",
+                                      "module_1_steering_joint", "module_2_steering_joint"}));
   EXPECT_EQ(first.position, (std::vector<double>{10.0, 12.5, 0.2 + 0.01, -0.3 - 0.02}));
   EXPECT_TRUE(first.velocity.empty());
   EXPECT_EQ(first.sec, 1'700'000'123);
@@ -233,18 +233,19 @@ TEST(Ros2Topics, PublishesDiagnosticArrayForTheAggregator) {
   std::atomic<bool> faulty{false};
   DdsBridge bridge(options, robot,
                    {.read_state = [](StateSnapshot&) { return false; },
-                    .read_diagnostics = [&] {
-                      DiagnosticsSample d;
-                      d.loop_rate_hz = 1000.0;
-                      d.measured_rate_hz = 999.9;
-                      d.localization_plugin = "kalman";
-                      if (faulty) {
-                        d.mode = LoopMode::kSafeStop;
-                        d.fault = FaultCode::kHardwareError;
-                        d.fault_detail = "sim: hardware not answering";
-                      }
-                      return d;
-                    }});
+                    .read_diagnostics =
+                        [&] {
+                          DiagnosticsSample d;
+                          d.loop_rate_hz = 1000.0;
+                          d.measured_rate_hz = 999.9;
+                          d.localization_plugin = "kalman";
+                          if (faulty) {
+                            d.mode = LoopMode::kSafeStop;
+                            d.fault = FaultCode::kHardwareError;
+                            d.fault_detail = "sim: hardware not answering";
+                          }
+                          return d;
+                        }});
   Participant client({0, tool_config_uri()});
   const QosPtr qos = default_qos(10);
   const dds_entity_t reader = make_reader(client, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
@@ -279,7 +280,8 @@ TEST(Ros2Topics, PublishesDiagnosticArrayForTheAggregator) {
       })) {
       }
       return ours;
-    })) << "no diagnostics for " << robot << " within 10 s";
+    })) << "no diagnostics for "
+        << robot << " within 10 s";
     return out;
   };
   const Status ok = next_ours();
@@ -312,15 +314,17 @@ TEST(Ros2Topics, StampedCmdVelDropsStaleCommands) {
   std::vector<double> received;
   DdsBridge bridge(options, ns,
                    {.read_state = [](StateSnapshot&) { return false; },
-                    .on_command = [&](const VelocityCommand& c) {
-                      const std::scoped_lock lock(mutex);
-                      received.push_back(c.twist.vx_mps);
-                      return true;
-                    }});
+                    .on_command =
+                        [&](const VelocityCommand& c) {
+                          const std::scoped_lock lock(mutex);
+                          received.push_back(c.twist.vx_mps);
+                          return true;
+                        }});
   bridge.start();
   Participant client({0, tool_config_uri()});
-  const dds_entity_t topic = create_topic(client.handle(), &geometry_msgs_msg_dds__TwistStamped__desc,
-                                          ("rt/" + ns + "/cmd_vel").c_str());
+  const dds_entity_t topic =
+      create_topic(client.handle(), &geometry_msgs_msg_dds__TwistStamped__desc,
+                   ("rt/" + ns + "/cmd_vel").c_str());
   const QosPtr qos = default_qos(10);  // teleop_twist_keyboard: reliable
   const dds_entity_t writer = dds_create_writer(client.handle(), topic, qos.get(), nullptr);
   ASSERT_TRUE(wait_for([&] { return publication_matched(writer); }));

@@ -44,7 +44,9 @@ constexpr double kFirstCheckS = 10.0;  // of driving
 constexpr double kCheckEveryS = 5.0;
 
 // Per-metre position std of the scenario's slip and scrub (see the header).
-double per_metre_noise() { return std::sqrt(kSpeed * kWheelSlipStd * kWheelSlipStd * kCorrelationS); }
+double per_metre_noise() {
+  return std::sqrt(kSpeed * kWheelSlipStd * kWheelSlipStd * kCorrelationS);
+}
 
 // Chi-square quantile by the Wilson-Hilferty transformation, accurate to about 1e-3
 // relative for the 60 degrees of freedom used here.
@@ -65,9 +67,9 @@ Interval nees_interval() {
 }
 
 double nees(const StateSnapshot& s) {
-  const Eigen::Vector3d e(s.estimate.pose.x_m - s.truth.x_m, s.estimate.pose.y_m - s.truth.y_m,
-                          std::remainder(s.estimate.pose.yaw_rad - s.truth.yaw_rad,
-                                         2.0 * std::numbers::pi));
+  const Eigen::Vector3d e(
+      s.estimate.pose.x_m - s.truth.x_m, s.estimate.pose.y_m - s.truth.y_m,
+      std::remainder(s.estimate.pose.yaw_rad - s.truth.yaw_rad, 2.0 * std::numbers::pi));
   const Eigen::Matrix3d p =
       Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(s.estimate.covariance.data());
   return e.dot(p.ldlt().solve(e));
@@ -86,8 +88,12 @@ std::string eg_noise() {
          ", bias_random_walk_radps_per_sqrt_s: 0.0";
 }
 
-std::string raw_eg_params() { return "{" + eg_noise() + "}"; }
-std::string lsm_params() { return "{" + eg_noise() + "}"; }
+std::string raw_eg_params() {
+  return "{" + eg_noise() + "}";
+}
+std::string lsm_params() {
+  return "{" + eg_noise() + "}";
+}
 // The gyro bias is the nominal one in this world (zero); the filter learns that while the
 // robot stands still.
 std::string kalman_params() {
@@ -217,9 +223,9 @@ TEST(Nees, AMisstatedNoiseModelIsCaught) {
   // Twice the world's per-metre noise: the covariance is four times too large where the
   // translation dominates, and the mean NEES falls below the interval.
   const std::string k = std::to_string(2.0 * per_metre_noise());
-  const NeesTable table = run_seeds(
-      "raw_eg", "{along_track_noise_m_per_sqrt_m: " + k + ", cross_track_noise_m_per_sqrt_m: " +
-                    k + ", bias_random_walk_radps_per_sqrt_s: 0.0}");
+  const NeesTable table = run_seeds("raw_eg", "{along_track_noise_m_per_sqrt_m: " + k +
+                                                  ", cross_track_noise_m_per_sqrt_m: " + k +
+                                                  ", bias_random_walk_radps_per_sqrt_s: 0.0}");
   const Interval bounds = nees_interval();
   for (std::size_t c = 0; c < table.size(); ++c) {
     double mean = 0.0;

@@ -68,11 +68,12 @@ ConstantSpeed constant_speed(const RigOptions& options, double vx, double vy, do
 
 TEST(PublishedTwist, DocentNoiseAtConstantSpeedIsBelowOnePercent) {
   const ConstantSpeed before = constant_speed(docent(0.001), 0.3, 0.0, 0.0);  // one cycle
-  const ConstantSpeed after = constant_speed(docent(0.02), 0.3, 0.0, 0.0);     // the default
-  std::printf("docent at 0.3 m/s: std(vx) one-cycle difference %.4f m/s, 20 ms window %.5f m/s "
-              "(published sigma %.5f m/s); std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
-              before.vx.std, after.vx.std, after.published_sigma_vx, before.wz.std,
-              after.wz.std, after.published_sigma_wz);
+  const ConstantSpeed after = constant_speed(docent(0.02), 0.3, 0.0, 0.0);    // the default
+  std::printf(
+      "docent at 0.3 m/s: std(vx) one-cycle difference %.4f m/s, 20 ms window %.5f m/s "
+      "(published sigma %.5f m/s); std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
+      before.vx.std, after.vx.std, after.published_sigma_vx, before.wz.std, after.wz.std,
+      after.published_sigma_wz);
   EXPECT_GT(before.vx.std, 0.03);  // the issue's +-20 %: what the window is measured against
   EXPECT_LT(after.vx.std, 0.003);  // 1 % of the speed
   EXPECT_NEAR(after.vx.mean, 0.3, 1e-3);
@@ -82,10 +83,11 @@ TEST(PublishedTwist, DocentOnAnArcKeepsYawRateNoiseWithinItsCovariance) {
   // Unequal wheel rates: the two encoders' quantization no longer cancels in the yaw rate.
   const ConstantSpeed before = constant_speed(docent(0.001), 0.3, 0.0, 0.37);
   const ConstantSpeed after = constant_speed(docent(0.02), 0.3, 0.0, 0.37);
-  std::printf("docent on an arc (0.3 m/s, 0.37 rad/s): std(vx) %.4f -> %.5f m/s (published "
-              "%.5f), std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
-              before.vx.std, after.vx.std, after.published_sigma_vx, before.wz.std,
-              after.wz.std, after.published_sigma_wz);
+  std::printf(
+      "docent on an arc (0.3 m/s, 0.37 rad/s): std(vx) %.4f -> %.5f m/s (published "
+      "%.5f), std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
+      before.vx.std, after.vx.std, after.published_sigma_vx, before.wz.std, after.wz.std,
+      after.published_sigma_wz);
   EXPECT_LT(after.vx.std, 0.003);
   EXPECT_NEAR(after.wz.mean, 0.37, 2e-3);
   EXPECT_LT(after.wz.std, 0.2 * before.wz.std);
@@ -106,9 +108,10 @@ TEST(PublishedTwist, CovarianceMatchesTheSpreadAveragedOverSpeeds) {
     ratio_vx += std::pow(run.vx.std / run.published_sigma_vx, 2) / kSpeeds;
     ratio_wz += std::pow(run.wz.std / run.published_sigma_wz, 2) / kSpeeds;
   }
-  std::printf("docent arcs at 0.10-0.49 m/s: measured / published twist variance, mean over "
-              "%d speeds: vx %.2f, wz %.2f\n",
-              kSpeeds, ratio_vx, ratio_wz);
+  std::printf(
+      "docent arcs at 0.10-0.49 m/s: measured / published twist variance, mean over "
+      "%d speeds: vx %.2f, wz %.2f\n",
+      kSpeeds, ratio_vx, ratio_wz);
   EXPECT_GT(ratio_vx, 0.5);
   EXPECT_LT(ratio_vx, 2.0);
   EXPECT_GT(ratio_wz, 0.5);
@@ -124,10 +127,11 @@ TEST(PublishedTwist, SwpcNoiseAtConstantSpeedIsBelowOnePercent) {
   const ConstantSpeed before = constant_speed(o, 0.25, 0.1, 0.1);
   o.twist_window_s = 0.02;
   const ConstantSpeed after = constant_speed(o, 0.25, 0.1, 0.1);
-  std::printf("swpc4 at (0.25, 0.1) m/s, 0.1 rad/s: std(vx) %.4f -> %.5f m/s (published %.5f), "
-              "std(vy) %.4f -> %.5f, std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
-              before.vx.std, after.vx.std, after.published_sigma_vx, before.vy.std,
-              after.vy.std, before.wz.std, after.wz.std, after.published_sigma_wz);
+  std::printf(
+      "swpc4 at (0.25, 0.1) m/s, 0.1 rad/s: std(vx) %.4f -> %.5f m/s (published %.5f), "
+      "std(vy) %.4f -> %.5f, std(wz) %.4f -> %.5f rad/s (published %.5f)\n",
+      before.vx.std, after.vx.std, after.published_sigma_vx, before.vy.std, after.vy.std,
+      before.wz.std, after.wz.std, after.published_sigma_wz);
   EXPECT_LT(after.vx.std, 0.0025);
   EXPECT_LT(after.vy.std, 0.0025);
   EXPECT_NEAR(after.vx.mean, 0.25, 2e-3);
@@ -207,9 +211,10 @@ RampDelays ramp_delays(double twist_window_s) {
 
 TEST(PublishedTwist, DelayIsHalfTheWindow) {
   const RampDelays d = ramp_delays(0.02);
-  std::printf("twist delay on a 0.5 m/s^2 ramp behind the truth: one-cycle difference %.2f ms, "
-              "20 ms window %.2f ms; added by the window %.2f ms\n",
-              1e3 * d.one_cycle_s, 1e3 * d.window_s, 1e3 * d.added_s);
+  std::printf(
+      "twist delay on a 0.5 m/s^2 ramp behind the truth: one-cycle difference %.2f ms, "
+      "20 ms window %.2f ms; added by the window %.2f ms\n",
+      1e3 * d.one_cycle_s, 1e3 * d.window_s, 1e3 * d.added_s);
   // Theory: the window's centre is 10 ms back, the one-cycle difference's 0.5 ms.
   EXPECT_NEAR(d.window_s, 0.010, 0.0006);
   EXPECT_NEAR(d.one_cycle_s, 0.0005, 0.0006);

@@ -166,8 +166,8 @@ TEST(SwiveldDds, EchoShowsThePoseAndDriveMovesTheRobot) {
   const double offset_s = static_cast<double>(real.tv_sec - mono.tv_sec) +
                           1e-9 * static_cast<double>(real.tv_nsec - mono.tv_nsec);
   for (const json& s : daemon.states(10)) {
-    const double ros_s = s["ros_stamp"]["sec"].get<double>() +
-                         1e-9 * s["ros_stamp"]["nanosec"].get<double>();
+    const double ros_s =
+        s["ros_stamp"]["sec"].get<double>() + 1e-9 * s["ros_stamp"]["nanosec"].get<double>();
     EXPECT_NEAR(ros_s - s["stamp_s"].get<double>(), offset_s, 1e-3) << s.dump();
     EXPECT_TRUE(s["has_covariance"].get<bool>());
     EXPECT_GT(s["pose_covariance"][0].get<double>(), 0.0);

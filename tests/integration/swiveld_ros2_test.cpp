@@ -38,17 +38,18 @@ void take_all(dds_entity_t reader, Fn&& fn) {
 TEST(SwiveldRos2, OdometryTransformJointStatesAndDiagnosticsFromOneDaemon) {
   const std::string dir = make_test_dir("ros2");
   const std::string config = dir + "/swiveld.yaml";
-  std::ofstream(config) << "loop: {rate_hz: 500, realtime: false}\n"
-                        << "robot_model: " << source_dir() << "/config/robots/docent.yaml\n"
-                        << "hardware: {plugin: sim}\n"
-                        << "drivetrain: {plugin: differential}\n"
-                        << "localization: {plugin: raw_eg}\n"
-                        << "command:\n  source: script\n  script:\n"
-                        << "    - {vx_mps: 0.3, wz_radps: 0.2, duration_s: 100}\n"
-                        << "dds:\n  domain_id: " << kDomain << "\n  config: " << source_dir()
-                        << "/config/dds/loopback.xml\n  diagnostics_rate_hz: 10\n"
-                        << "  ros2: {enabled: true, namespace: it_ros2, odom_frame_id: it_ros2/odom,"
-                        << " base_frame_id: it_ros2/base_link}\n";
+  std::ofstream(config)
+      << "loop: {rate_hz: 500, realtime: false}\n"
+      << "robot_model: " << source_dir() << "/config/robots/docent.yaml\n"
+      << "hardware: {plugin: sim}\n"
+      << "drivetrain: {plugin: differential}\n"
+      << "localization: {plugin: raw_eg}\n"
+      << "command:\n  source: script\n  script:\n"
+      << "    - {vx_mps: 0.3, wz_radps: 0.2, duration_s: 100}\n"
+      << "dds:\n  domain_id: " << kDomain << "\n  config: " << source_dir()
+      << "/config/dds/loopback.xml\n  diagnostics_rate_hz: 10\n"
+      << "  ros2: {enabled: true, namespace: it_ros2, odom_frame_id: it_ros2/odom,"
+      << " base_frame_id: it_ros2/base_link}\n";
   Child daemon(swiveld_exe(), {"--config", config});
 
   dds::Participant client({static_cast<std::uint32_t>(kDomain), dds::tool_config_uri()});
@@ -84,7 +85,8 @@ TEST(SwiveldRos2, OdometryTransformJointStatesAndDiagnosticsFromOneDaemon) {
     take_all<sensor_msgs_msg_dds__JointState_>(joints, [&](const auto& m) {
       joint_stamps.insert(stamp_ns(m.header.stamp));
       joint_names.clear();
-      for (std::uint32_t i = 0; i < m.name._length; ++i) joint_names.emplace_back(m.name._buffer[i]);
+      for (std::uint32_t i = 0; i < m.name._length; ++i)
+        joint_names.emplace_back(m.name._buffer[i]);
       velocities = m.velocity._length;
     });
     take_all<diagnostic_msgs_msg_dds__DiagnosticArray_>(diagnostics, [&](const auto& m) {

@@ -7,8 +7,8 @@
 #include <time.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <thread>
 
 #include "fake_plugins.hpp"

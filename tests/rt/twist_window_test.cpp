@@ -75,8 +75,8 @@ TEST(TwistWindow, FitsTheRatesOfLinearAnglesAcrossTheRingsWrap) {
 TEST(TwistWindow, CovarianceIsTheQuantizationOfEachFittedRate) {
   const double wheel_q = 2.0 * std::numbers::pi / 4096;
   const double steer_q = 2.0 * std::numbers::pi / 1024;
-  TwistWindow window({.readings = 21, .wheel_resolution_rad = wheel_q,
-                      .steer_resolution_rad = steer_q});
+  TwistWindow window(
+      {.readings = 21, .wheel_resolution_rad = wheel_q, .steer_resolution_rad = steer_q});
   RatesDrivetrain drivetrain;
   for (int k = 0; k < 40; ++k) window.push(reading(5.0 + k * kDt, 0.3 * k, 0.1 * k, 0.0));
   TwistEstimate out;
@@ -98,8 +98,8 @@ TEST(TwistWindow, UnwrapsSteeringThatTheEncoderWraps) {
   RatesDrivetrain drivetrain;
   for (int k = 0; k < 11; ++k) {
     const double unwrapped = 3.1 + 3.0 * k * kDt;  // crosses pi half way
-    window.push(reading(k * kDt + 1.0, 0.0, 0.0,
-                        std::remainder(unwrapped, 2.0 * std::numbers::pi)));
+    window.push(
+        reading(k * kDt + 1.0, 0.0, 0.0, std::remainder(unwrapped, 2.0 * std::numbers::pi)));
   }
   TwistEstimate out;
   ASSERT_EQ(window.estimate(drivetrain, out), Status::kOk);
@@ -127,8 +127,7 @@ TEST(TwistWindow, AReadingThatIsNotLaterStartsAfresh) {
 TEST(TwistWindow, RefusesSizesOutOfRange) {
   EXPECT_THROW(TwistWindow({.readings = 1}), std::invalid_argument);
   EXPECT_THROW(TwistWindow({.readings = kMaxTwistWindowReadings + 1}), std::invalid_argument);
-  EXPECT_THROW(TwistWindow({.readings = 5, .wheel_resolution_rad = -1.0}),
-               std::invalid_argument);
+  EXPECT_THROW(TwistWindow({.readings = 5, .wheel_resolution_rad = -1.0}), std::invalid_argument);
 }
 
 TEST(TwistWindow, LoopWindowIsItsDurationInPeriodsPlusOne) {

@@ -108,8 +108,8 @@ struct DdsBridge::Entities {
   dds_entity_t calibration_writer = 0;
   dds_entity_t reply_writer = 0;
   dds_entity_t odom_writer = 0;  ///< ROS 2, 0 when disabled
-  dds_entity_t tf_writer = 0;            ///< ROS 2, 0 when disabled or publish_tf is off
-  dds_entity_t joint_states_writer = 0;  ///< ROS 2, 0 when disabled or no joints named
+  dds_entity_t tf_writer = 0;    ///< ROS 2, 0 when disabled or publish_tf is off
+  dds_entity_t joint_states_writer = 0;      ///< ROS 2, 0 when disabled or no joints named
   dds_entity_t ros2_diagnostics_writer = 0;  ///< ROS 2, 0 when disabled
   dds_entity_t command_reader = 0;
   dds_entity_t motion_capture_reader = 0;
@@ -180,15 +180,14 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
       dds_->joint_states_writer = writer(&sensor_msgs_msg_dds__JointState__desc,
                                          options_.ros2.joint_states_topic(), writer_qos.get());
     }
-    dds_->ros2_diagnostics_writer =
-        writer(&diagnostic_msgs_msg_dds__DiagnosticArray__desc,
-               options_.ros2.diagnostics_topic(), writer_qos.get());
+    dds_->ros2_diagnostics_writer = writer(&diagnostic_msgs_msg_dds__DiagnosticArray__desc,
+                                           options_.ros2.diagnostics_topic(), writer_qos.get());
     // Best effort so that teleop tools with either reliability match.
     const QosPtr cmd_vel_qos = best_effort_qos(10);
-    dds_->cmd_vel_reader = reader(options_.ros2.cmd_vel_stamped
-                                      ? &geometry_msgs_msg_dds__TwistStamped__desc
-                                      : &geometry_msgs_msg_dds__Twist__desc,
-                                  options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
+    dds_->cmd_vel_reader =
+        reader(options_.ros2.cmd_vel_stamped ? &geometry_msgs_msg_dds__TwistStamped__desc
+                                             : &geometry_msgs_msg_dds__Twist__desc,
+               options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
     // Reliable, as RViz and `ros2 topic pub` publish it: a one-off pose must not be lost.
     dds_->initialpose_reader =
         reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
@@ -529,13 +528,14 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
   }
   if (d.fault != FaultCode::kNone) {
     message = std::string(d.mode == LoopMode::kSafeStop ? "safe stop: " : "") +
-              fault_code_name(d.fault) + (d.fault_detail.empty() ? "" : " (" + d.fault_detail + ")");
+              fault_code_name(d.fault) +
+              (d.fault_detail.empty() ? "" : " (" + d.fault_detail + ")");
   } else if (!d.last_reload_ok) {
     message = "running; last reload rejected";
   } else if (d.restart_required) {
     message = "running; a changed setting needs a restart";
   }
-  const char* mode = d.mode == LoopMode::kIdle         ? "idle"
+  const char* mode = d.mode == LoopMode::kIdle          ? "idle"
                      : d.mode == LoopMode::kVelocity    ? "velocity"
                      : d.mode == LoopMode::kCalibration ? "calibration"
                                                         : "safe_stop";
@@ -693,9 +693,10 @@ void DdsBridge::take_ros2_commands() {
           const double age_s = 1e-9 * static_cast<double>(realtime_now_ns() - stamp_ns);
           if (!(std::abs(age_s) <= options_.ros2.cmd_vel_max_age_s)) {
             if (commands_stale_.fetch_add(1, std::memory_order_relaxed) == 0) {
-              spdlog::warn("dds: {}: dropped a TwistStamped {:.3f} s from now (more than "
-                           "cmd_vel_max_age_s {} s); further ones are counted in diagnostics",
-                           options_.ros2.cmd_vel_topic(), age_s, options_.ros2.cmd_vel_max_age_s);
+              spdlog::warn(
+                  "dds: {}: dropped a TwistStamped {:.3f} s from now (more than "
+                  "cmd_vel_max_age_s {} s); further ones are counted in diagnostics",
+                  options_.ros2.cmd_vel_topic(), age_s, options_.ros2.cmd_vel_max_age_s);
             }
             return;
           }

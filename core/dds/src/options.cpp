@@ -47,9 +47,13 @@ std::string Ros2Options::joint_states_topic() const {
   return ros2_topic(ros_namespace, "joint_states");
 }
 
-std::string Ros2Options::tf_topic() const { return "rt/tf"; }
+std::string Ros2Options::tf_topic() const {
+  return "rt/tf";
+}
 
-std::string Ros2Options::diagnostics_topic() const { return "rt/diagnostics"; }
+std::string Ros2Options::diagnostics_topic() const {
+  return "rt/diagnostics";
+}
 
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir) {

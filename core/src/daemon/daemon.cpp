@@ -310,8 +310,7 @@ void Daemon::start_bridge() {
                                              std::move(callbacks));
   bridge_->start();
   spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
-               dds_options_.domain_id,
-               dds::resolve_config(dds_options_.config_uri).description,
+               dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,
                dds_options_.publish_rate_hz,
                dds_options_.ros2.enabled
                    ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic() +

@@ -1,5 +1,7 @@
 #include "swivel/rt/control_loop.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -7,7 +9,6 @@
 #include <span>
 #include <stdexcept>
 #include <system_error>
-#include <time.h>
 
 namespace swivel::rt {
 namespace {
@@ -108,11 +109,10 @@ std::size_t twist_window_readings(const LoopOptions& options) {
   const double periods = options.twist_window_s * options.rate_hz;
   if (!std::isfinite(periods) || !(options.twist_window_s > 0.0) ||
       periods > static_cast<double>(kMaxTwistWindowReadings - 1)) {
-    throw std::invalid_argument(
-        "twist_window_s must be finite, positive and at most " +
-        std::to_string(kMaxTwistWindowReadings - 1) + " loop periods, got " +
-        std::to_string(options.twist_window_s) + " s at " + std::to_string(options.rate_hz) +
-        " Hz");
+    throw std::invalid_argument("twist_window_s must be finite, positive and at most " +
+                                std::to_string(kMaxTwistWindowReadings - 1) +
+                                " loop periods, got " + std::to_string(options.twist_window_s) +
+                                " s at " + std::to_string(options.rate_hz) + " Hz");
   }
   return std::max<std::size_t>(2, static_cast<std::size_t>(std::llround(periods)) + 1);
 }

@@ -12,7 +12,9 @@ namespace {
 
 using ConstArrayMap = Eigen::Map<const Eigen::ArrayXd>;
 
-bool valid_resolution(double v) { return std::isfinite(v) && v >= 0.0; }
+bool valid_resolution(double v) {
+  return std::isfinite(v) && v >= 0.0;
+}
 
 }  // namespace
 
@@ -127,7 +129,8 @@ Status TwistWindow::estimate(Drivetrain& drivetrain, TwistEstimate& out) {
 
   out.twist = increment.twist;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.covariance[static_cast<std::size_t>(3 * r + c)] = covariance(r, c);
+    for (int c = 0; c < 3; ++c)
+      out.covariance[static_cast<std::size_t>(3 * r + c)] = covariance(r, c);
   }
   out.has_covariance = wheel_sigma > 0.0 || steer_sigma > 0.0;
   out.delay_s = newest_s_ - t_c;

@@ -3,11 +3,11 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "swivel/robot_model.hpp"
-
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "swivel/robot_model.hpp"
 
 namespace swivel::dds {
 

@@ -53,9 +53,9 @@
 #include <condition_variable>
 #include <cstdint>
 #include <future>
+#include <limits>
 #include <mutex>
 #include <stop_token>
-#include <limits>
 #include <string>
 #include <thread>
 #include <vector>
@@ -159,8 +159,8 @@ class ControlLoop {
   ControlLoop& operator=(const ControlLoop&) = delete;
 
   /// Not real-time safe. Applies real-time settings where permitted, starts the log thread,
-  /// the clock-offset thread and the loop thread, and returns one line per setting that was refused (the loop then
-  /// runs SCHED_OTHER and/or without locked memory).
+  /// the clock-offset thread and the loop thread, and returns one line per setting that was refused
+  /// (the loop then runs SCHED_OTHER and/or without locked memory).
   /// @throws std::system_error when a thread cannot be created; std::logic_error when
   ///         already running.
   std::vector<std::string> start();

@@ -16,7 +16,9 @@ bool is_covariance(const Eigen::Matrix3d& m) noexcept {
   return ldlt.vectorD().minCoeff() >= -1e-12 * scale;
 }
 
-EgCovariance::EgCovariance() noexcept { p_.setZero(); }
+EgCovariance::EgCovariance() noexcept {
+  p_.setZero();
+}
 
 void EgCovariance::reset(const Matrix3& pose_cov) noexcept {
   p_.setZero();
@@ -65,10 +67,8 @@ void EgCovariance::step(const Pose2& delta, double dt_s, double chord_yaw_rad,
                                 (s * delta.x_m + c * delta.y_m) / d);
     const Eigen::Vector2d across(-along.y(), along.x());
     p_.topLeftCorner<2, 2>() +=
-        (n.along_track_m_per_sqrt_m * n.along_track_m_per_sqrt_m * d) * along *
-            along.transpose() +
-        (n.cross_track_m_per_sqrt_m * n.cross_track_m_per_sqrt_m * d) * across *
-            across.transpose();
+        (n.along_track_m_per_sqrt_m * n.along_track_m_per_sqrt_m * d) * along * along.transpose() +
+        (n.cross_track_m_per_sqrt_m * n.cross_track_m_per_sqrt_m * d) * across * across.transpose();
   }
   p_(2, 2) += q_yaw;
   p_(3, 3) += n.bias_walk_radps_per_sqrt_s * n.bias_walk_radps_per_sqrt_s * dt_s;

@@ -29,8 +29,8 @@ EgNoise read_eg_noise(ParamReader& params, const RobotModel* robot) {
       params.number_or("along_track_noise_m_per_sqrt_m", n.along_track_m_per_sqrt_m, 0.0, 10.0);
   n.cross_track_m_per_sqrt_m =
       params.number_or("cross_track_noise_m_per_sqrt_m", n.cross_track_m_per_sqrt_m, 0.0, 10.0);
-  n.rotation_rad_per_sqrt_rad = params.number_or("rotation_noise_rad_per_sqrt_rad",
-                                                 n.rotation_rad_per_sqrt_rad, 0.0, 10.0);
+  n.rotation_rad_per_sqrt_rad =
+      params.number_or("rotation_noise_rad_per_sqrt_rad", n.rotation_rad_per_sqrt_rad, 0.0, 10.0);
   n.yaw_rad_per_sqrt_m =
       params.number_or("yaw_noise_rad_per_sqrt_m", n.yaw_rad_per_sqrt_m, 0.0, 10.0);
   double gyro_noise = 0.0;

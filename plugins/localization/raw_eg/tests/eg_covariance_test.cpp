@@ -109,7 +109,7 @@ TEST(EgCovariance, SetPoseCovarianceTakesOnlyACovariance) {
   handed(0, 1) = handed(1, 0) = 0.01;
   ASSERT_TRUE(cov.set_pose_covariance(handed));
   EXPECT_TRUE((cov.covariance().topLeftCorner<3, 3>().isApprox(handed)));
-  EXPECT_EQ(cov.covariance()(2, 3), 0.0);  // the correlation with the bias is dropped
+  EXPECT_EQ(cov.covariance()(2, 3), 0.0);            // the correlation with the bias is dropped
   EXPECT_NEAR(cov.covariance()(3, 3), 1e-4, 1e-18);  // the bias variance kept
 
   Eigen::Matrix3d not_psd = Eigen::Matrix3d::Identity();
