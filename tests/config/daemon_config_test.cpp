@@ -142,6 +142,22 @@ TEST_F(DaemonConfigTest, ControlledStopDecelerationsAreReadAndRangeChecked) {
             "[0.01, 100], got 0");
 }
 
+TEST_F(DaemonConfigTest, TwistWindowIsReadAndBoundedByTheLoopPeriod) {
+  EXPECT_EQ(load(kValid).twist_window_s, 0.02);
+  const DaemonConfig c =
+      load(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.05}\nplugin_path:"));
+  EXPECT_EQ(c.twist_window_s, 0.05);
+  // loop.rate_hz is 500 here: 2 ms to 0.51 s.
+  EXPECT_EQ(
+      error_of(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.001}\nplugin_path:")),
+      "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
+      "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.001");
+  EXPECT_EQ(
+      error_of(replaced(kValid, "plugin_path:", "odometry: {twist_window_s: 0.6}\nplugin_path:")),
+      "swiveld.yaml:21:12: odometry.twist_window_s: expected a number of seconds in "
+      "[0.002, 0.51] (1 to 255 periods of loop.rate_hz), got 0.6");
+}
+
 TEST_F(DaemonConfigTest, CalibrationSectionIsOptionalAndValidated) {
   const std::string with = replaced(
       kValid, "command:\n", "calibration:\n  plugin: swpc_geometric\n  params: {rotation_deg: 120}\ncommand:\n");
@@ -192,8 +208,8 @@ TEST_F(DaemonConfigTest, UnknownKeyListsKnownKeys) {
             "realtime)");
   EXPECT_EQ(error_of(replaced(kValid, "status:", "stats:")),
             "swiveld.yaml:23:1: stats: unknown key (known: loop, robot_model, hardware, "
-            "drivetrain, localization, calibration, command, controlled_stop, plugin_path, "
-            "logging, status, dds)");
+            "drivetrain, localization, calibration, command, controlled_stop, odometry, "
+            "plugin_path, logging, status, dds)");
 }
 
 TEST_F(DaemonConfigTest, WrongTypeShowsValue) {

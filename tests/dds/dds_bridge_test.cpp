@@ -28,10 +28,13 @@ using test::wait_for;
 StateSnapshot sample_snapshot() {
   StateSnapshot s;
   s.stamp_s = swivel::monotonic_s();
+  s.ros_stamp_ns = 1'700'000'000'250'000'001LL;
   s.estimate.pose = {1.5, -2.0, 0.3};
   for (std::size_t i = 0; i < 9; ++i) s.estimate.covariance[i] = 0.1 * static_cast<double>(i + 1);
   s.estimate.has_covariance = true;
   s.odometry_twist = {0.2, -0.05, 0.1};
+  for (std::size_t i = 0; i < 9; ++i) s.twist_covariance[i] = 0.01 * static_cast<double>(i + 1);
+  s.has_twist_covariance = true;
   s.command_twist = {0.25, 0.0, 0.12};
   s.gyro_wz_radps = 0.11;
   s.module_count = 2;
@@ -100,6 +103,8 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   })) << "no RobotState within 10 s";
   EXPECT_GT(got.cycle, 0u);
   EXPECT_NEAR(got.stamp_s, swivel::monotonic_s(), 5.0);
+  EXPECT_EQ(got.ros_stamp_sec, 1'700'000'000);
+  EXPECT_EQ(got.ros_stamp_nanosec, 250'000'001U);
   EXPECT_DOUBLE_EQ(got.x_m, 1.5);
   EXPECT_DOUBLE_EQ(got.y_m, -2.0);
   EXPECT_DOUBLE_EQ(got.yaw_rad, 0.3);
@@ -109,6 +114,9 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   EXPECT_DOUBLE_EQ(got.vx_mps, 0.2);
   EXPECT_DOUBLE_EQ(got.vy_mps, -0.05);
   EXPECT_DOUBLE_EQ(got.wz_radps, 0.1);
+  EXPECT_TRUE(got.has_twist_covariance);
+  EXPECT_DOUBLE_EQ(got.twist_covariance[0], 0.01);
+  EXPECT_DOUBLE_EQ(got.twist_covariance[8], 0.09);
   EXPECT_DOUBLE_EQ(got.cmd_vx_mps, 0.25);
   EXPECT_DOUBLE_EQ(got.cmd_wz_radps, 0.12);
   EXPECT_DOUBLE_EQ(got.gyro_wz_radps, 0.11);

@@ -1,12 +1,12 @@
-#include "swivel/dds/options.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "swivel/config/config_error.hpp"
+#include "swivel/dds/options.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
@@ -30,6 +30,11 @@ TEST(DdsOptions, DefaultsWhenAbsent) {
   EXPECT_DOUBLE_EQ(options.diagnostics_rate_hz, 2.0);
   EXPECT_EQ(options.history_depth, 1);
   EXPECT_FALSE(options.ros2.enabled);
+  EXPECT_TRUE(options.ros2.publish_tf);
+  EXPECT_FALSE(options.ros2.cmd_vel_stamped);
+  EXPECT_DOUBLE_EQ(options.ros2.cmd_vel_max_age_s, 0.5);
+  EXPECT_TRUE(options.ros2.wheel_joints.empty());
+  EXPECT_TRUE(options.ros2.steering_joints.empty());
 }
 
 TEST(DdsOptions, ReadsEveryKey) {
@@ -38,7 +43,8 @@ TEST(DdsOptions, ReadsEveryKey) {
       YAML::Load("{domain_id: 7, config: dds/loopback.xml, publish_rate_hz: 50,"
                  " diagnostics_rate_hz: 1, history_depth: 5,"
                  " ros2: {enabled: true, namespace: /robot1/, odom_frame_id: map,"
-                 " base_frame_id: base_footprint}}"),
+                 " base_frame_id: base_footprint, publish_tf: false, cmd_vel_stamped: true,"
+                 " cmd_vel_max_age_s: 0.2, wheel_joints: [l, r]}}"),
       "swiveld.yaml", source_dir + "/config");
 
   EXPECT_EQ(options.domain_id, 7u);
@@ -51,6 +57,55 @@ TEST(DdsOptions, ReadsEveryKey) {
   EXPECT_EQ(options.ros2.odom_topic(), "rt/robot1/odom");
   EXPECT_EQ(options.ros2.odom_frame_id, "map");
   EXPECT_EQ(options.ros2.base_frame_id, "base_footprint");
+  EXPECT_FALSE(options.ros2.publish_tf);
+  EXPECT_TRUE(options.ros2.cmd_vel_stamped);
+  EXPECT_DOUBLE_EQ(options.ros2.cmd_vel_max_age_s, 0.2);
+  EXPECT_EQ(options.ros2.wheel_joints, (std::vector<std::string>{"l", "r"}));
+}
+
+TEST(DdsOptions, JointNamesDefaultFromTheRobotModelAndMustMatchIt) {
+  RobotModel docent;
+  docent.name = "docent";
+  docent.source_file = "robots/docent.yaml";
+  Ros2Options ros2;
+  complete_joints(docent, "swiveld.yaml", ros2);
+  EXPECT_EQ(ros2.wheel_joints, (std::vector<std::string>{"left_wheel_joint", "right_wheel_joint"}));
+  EXPECT_TRUE(ros2.steering_joints.empty());
+  EXPECT_TRUE(ros2.steering_offsets_rad.empty());
+
+  RobotModel swpc;
+  swpc.name = "swpc2";
+  swpc.source_file = "robots/swpc2.yaml";
+  swpc.drivetrain = DrivetrainKind::kSwpc;
+  swpc.modules.resize(2);
+  swpc.modules[1].steering_offset_rad = 0.02;
+  Ros2Options casters;
+  complete_joints(swpc, "swiveld.yaml", casters);
+  EXPECT_EQ(casters.wheel_joints,
+            (std::vector<std::string>{"module_1_wheel_joint", "module_2_wheel_joint"}));
+  EXPECT_EQ(casters.steering_joints,
+            (std::vector<std::string>{"module_1_steering_joint", "module_2_steering_joint"}));
+  EXPECT_EQ(casters.steering_offsets_rad, (std::vector<double>{0.0, 0.02}));
+
+  Ros2Options three;
+  three.wheel_joints = {"a", "b", "c"};
+  try {
+    complete_joints(docent, "swiveld.yaml", three);
+    ADD_FAILURE() << "three wheel joints accepted for two wheels";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "swiveld.yaml: dds.ros2.wheel_joints: expected 2 names, one per module of robot "
+                 "'docent' (robots/docent.yaml), got 3");
+  }
+  Ros2Options steered;
+  steered.steering_joints = {"s1", "s2"};
+  EXPECT_THROW(complete_joints(docent, "swiveld.yaml", steered), ConfigError);
+}
+
+TEST(DdsOptions, RejectsAnEmptyJointName) {
+  EXPECT_EQ(error_of("ros2: {wheel_joints: [left, '']}"),
+            "swiveld.yaml:1:8: dds.ros2.wheel_joints: expected a list of joint names, got a "
+            "non-text or empty entry at index 1");
 }
 
 TEST(DdsOptions, RejectsOutOfRangeRate) {

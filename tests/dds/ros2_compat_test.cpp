@@ -4,7 +4,6 @@
 // geometry_msgs/PoseWithCovarianceStamped.
 
 #include <gtest/gtest.h>
-#include <time.h>
 
 #include <atomic>
 #include <chrono>
@@ -29,12 +28,6 @@ using test::take_one;
 using test::unique_robot_id;
 using test::wait_for;
 
-double realtime_now_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 DdsOptions ros2_options(const std::string& ros_namespace) {
   DdsOptions options;
   options.ros2.enabled = true;
@@ -49,10 +42,13 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
                      s = StateSnapshot{};
                      s.cycle = ++cycle;
                      s.stamp_s = swivel::monotonic_s();
+                     s.ros_stamp_ns = 1'700'000'000'987'654'321LL;
                      s.estimate.pose = {1.0, 2.0, M_PI / 2};
                      s.estimate.has_covariance = true;
                      s.estimate.covariance = {1, 2, 3, 4, 5, 6, 7, 8, 9};
                      s.odometry_twist = {0.5, 0.1, -0.2};
+                     s.has_twist_covariance = true;
+                     s.twist_covariance = {11, 12, 13, 14, 15, 16, 17, 18, 19};
                      return true;
                    }});
   Participant client({0, tool_config_uri()});
@@ -76,8 +72,9 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   })) << "no odometry on rt/" << ns << "/odom within 10 s";
   EXPECT_EQ(frame, "odom");
   EXPECT_EQ(child_frame, "base_link");
-  const double stamp_s = odom.header.stamp.sec + 1e-9 * odom.header.stamp.nanosec;
-  EXPECT_NEAR(stamp_s, realtime_now_s(), 10.0);  // ROS time is Unix time
+  // The snapshot's ROS time, mapped by the loop from its monotonic stamp (rt::ClockOffset).
+  EXPECT_EQ(odom.header.stamp.sec, 1'700'000'000);
+  EXPECT_EQ(odom.header.stamp.nanosec, 987'654'321U);
   EXPECT_DOUBLE_EQ(odom.pose.pose.position.x, 1.0);
   EXPECT_DOUBLE_EQ(odom.pose.pose.position.y, 2.0);
   EXPECT_DOUBLE_EQ(odom.pose.pose.position.z, 0.0);
@@ -94,6 +91,14 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.x, 0.5);
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.y, 0.1);
   EXPECT_DOUBLE_EQ(odom.twist.twist.angular.z, -0.2);
+  // (vx, vy, wz) on rows/columns (0, 1, 5) of the twist's 6x6 covariance.
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[0], 11.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[1], 12.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[5], 13.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[7], 15.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[30], 17.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[35], 19.0);
+  EXPECT_DOUBLE_EQ(odom.twist.covariance[14], 0.0);
 
   // What a ROS 2 node discovers: the type name and plain CDR only.
   dds_instance_handle_t publications[4];

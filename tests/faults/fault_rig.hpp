@@ -57,6 +57,8 @@ struct RigOptions {
   MotionLimits limits;  ///< the loop's motion limits (none unless a test says)
   /// The controlled stop's deceleration where `limits` has none (infinite: zero at once).
   double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
+  /// The published twist's window (the loop's default unless a test says).
+  double twist_window_s = rt::LoopOptions{}.twist_window_s;
 };
 
 inline PluginContext plugin_context(const std::string& params_yaml, const std::string& path,
@@ -93,6 +95,8 @@ class FaultRig {
     loop_options.odometry_check = options.odometry_check;
     loop_options.limits = options.limits;
     loop_options.stop_linear_deceleration_mps2 = options.stop_linear_deceleration_mps2;
+    loop_options.twist_window_s = options.twist_window_s;
+    rt::set_encoder_resolutions(robot, loop_options);  // as the daemon does
     loop = std::make_unique<rt::ControlLoop>(loop_options, *hardware, *drivetrain, *localization,
                                              options.localization.c_str());
     void* library = dlopen(hardware.path().c_str(), RTLD_NOW | RTLD_NOLOAD);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <time.h>
 
 #include <array>
 #include <cmath>
@@ -154,6 +155,24 @@ TEST(SwiveldDds, EchoShowsThePoseAndDriveMovesTheRobot) {
   EXPECT_LT(x_of(after) - x0, 0.9);
   EXPECT_NEAR(y_of(after), 0.0, 0.05);
   EXPECT_TRUE(daemon.process().alive());
+
+  // Each state carries its stamp twice: CLOCK_MONOTONIC and ROS time, which agree through
+  // the offset of the two clocks (measured here the way any program on this host would).
+  // Pose and twist come with their covariances.
+  timespec mono{};
+  timespec real{};
+  clock_gettime(CLOCK_MONOTONIC, &mono);
+  clock_gettime(CLOCK_REALTIME, &real);
+  const double offset_s = static_cast<double>(real.tv_sec - mono.tv_sec) +
+                          1e-9 * static_cast<double>(real.tv_nsec - mono.tv_nsec);
+  for (const json& s : daemon.states(10)) {
+    const double ros_s =
+        s["ros_stamp"]["sec"].get<double>() + 1e-9 * s["ros_stamp"]["nanosec"].get<double>();
+    EXPECT_NEAR(ros_s - s["stamp_s"].get<double>(), offset_s, 1e-3) << s.dump();
+    EXPECT_TRUE(s["has_covariance"].get<bool>());
+    EXPECT_GT(s["pose_covariance"][0].get<double>(), 0.0);
+    EXPECT_TRUE(s["has_twist_covariance"].get<bool>());
+  }
 }
 
 TEST(SwiveldDds, RobotStopsOnCommandTimeoutWhenTheCommandSourceIsKilled) {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <thread>
 #include <vector>
@@ -40,6 +41,9 @@ Outcome run_scenario(FakeLocalization& first, FakeLocalization& second, FakeHard
   FakeDrivetrain drivetrain;
   LoopOptions options;
   options.realtime = false;
+  // The twist window's fit and its covariance (a forward call per channel) run every cycle.
+  options.wheel_encoder_resolution_rad = 2.0 * M_PI / 4096;
+  options.steer_encoder_resolution_rad = 2.0 * M_PI / 4096;
   ControlLoop loop(options, hardware, drivetrain, first, "fake_a");
   Outcome outcome;
   std::thread loop_thread([&] {
@@ -90,6 +94,9 @@ TEST(LoopAllocations, NoHeapOperationsOnTheLoopThreadAcrossASwap) {
   EXPECT_EQ(outcome.last.fault_count, 2U);  // the sensor fault and the command timeout
   EXPECT_EQ(outcome.last.mode, LoopMode::kVelocity);
   EXPECT_GT(second.updates.load(), 5000U);
+  EXPECT_TRUE(outcome.last.has_twist_covariance);
+  EXPECT_GT(outcome.last.twist_covariance[0], 0.0);
+  EXPECT_GT(outcome.last.odometry_twist.vx_mps, 0.25);
 }
 
 TEST(LoopAllocations, GuardCatchesAPluginThatAllocates) {

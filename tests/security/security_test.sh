@@ -170,7 +170,8 @@ case_permissions_cover_every_bridge_topic() {
     [[ ${#topics[@]} -gt 0 ]] || fail "no topic names found in $header"
   fi
   # The ROS 2 names, without and with a namespace (core/dds/src/options.cpp).
-  topics+=(rt/odom rt/robot1/odom rt/cmd_vel rt/robot1/cmd_vel rt/initialpose rt/robot1/initialpose)
+  topics+=(rt/odom rt/robot1/odom rt/cmd_vel rt/robot1/cmd_vel rt/initialpose rt/robot1/initialpose
+           rt/tf rt/diagnostics rt/joint_states rt/robot1/joint_states)
   local topic daemon_grants client_grants observer_grants
   for topic in "${topics[@]}"; do
     daemon_grants=$(access "$daemon" "$topic")

@@ -118,6 +118,8 @@ void run_loop_block(const Settings& s, LoopPhase& phase, LatencyHistogram& block
   options.rate_hz = s.rate_hz;
   options.fifo_priority = s.priority;
   options.realtime = s.realtime;
+  // As the daemon: the twist window's covariance runs its forward-kinematics calls.
+  if (p.real) swivel::rt::set_encoder_resolutions(p.robot, options);
   auto loop = std::make_unique<swivel::rt::ControlLoop>(options, p.hw(), p.dt(), p.loc(),
                                                         p.localization_name().c_str());
   for (const auto& w : loop->start()) add_unique(warnings, w);

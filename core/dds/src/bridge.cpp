@@ -14,11 +14,14 @@
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
+#include "swivel/rt/clock_offset.hpp"
 
 namespace swivel::dds {
 
@@ -39,6 +42,23 @@ swivel_msg_TimingStats to_msg(const TimingPercentiles& p) {
 }
 
 char* c_str(const std::string& s) { return const_cast<char*>(s.c_str()); }
+
+// CLOCK_REALTIME now, ns: ROS time for what the bridge stamps itself (diagnostics, the
+// stale check of stamped commands); loop samples carry the loop's own mapping.
+std::int64_t realtime_now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+// Points an idlc sequence at `length` elements the caller owns (written, never freed).
+template <typename Sequence, typename Element>
+void borrow(Sequence& sequence, Element* elements, std::uint32_t length) {
+  sequence._maximum = length;
+  sequence._length = length;
+  sequence._buffer = elements;
+  sequence._release = false;
+}
 
 constexpr std::uint32_t kTakeBatch = 16;
 
@@ -89,6 +109,9 @@ struct DdsBridge::Entities {
   dds_entity_t calibration_writer = 0;
   dds_entity_t reply_writer = 0;
   dds_entity_t odom_writer = 0;  ///< ROS 2, 0 when disabled
+  dds_entity_t tf_writer = 0;    ///< ROS 2, 0 when disabled or publish_tf is off
+  dds_entity_t joint_states_writer = 0;      ///< ROS 2, 0 when disabled or no joints named
+  dds_entity_t ros2_diagnostics_writer = 0;  ///< ROS 2, 0 when disabled
   dds_entity_t command_reader = 0;
   dds_entity_t motion_capture_reader = 0;
   dds_entity_t request_reader = 0;
@@ -147,10 +170,25 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
   if (options_.ros2.enabled) {
     dds_->odom_writer = writer(&nav_msgs_msg_dds__Odometry__desc, options_.ros2.odom_topic(),
                                writer_qos.get());
+    // Reliable, volatile, keep-last writers like the others: what tf2's listener,
+    // robot_state_publisher and the diagnostic aggregator subscribe with (reliable or best
+    // effort) matches them.
+    if (options_.ros2.publish_tf) {
+      dds_->tf_writer =
+          writer(&tf2_msgs_msg_dds__TFMessage__desc, options_.ros2.tf_topic(), writer_qos.get());
+    }
+    if (!options_.ros2.wheel_joints.empty()) {
+      dds_->joint_states_writer = writer(&sensor_msgs_msg_dds__JointState__desc,
+                                         options_.ros2.joint_states_topic(), writer_qos.get());
+    }
+    dds_->ros2_diagnostics_writer = writer(&diagnostic_msgs_msg_dds__DiagnosticArray__desc,
+                                           options_.ros2.diagnostics_topic(), writer_qos.get());
     // Best effort so that teleop tools with either reliability match.
     const QosPtr cmd_vel_qos = best_effort_qos(10);
-    dds_->cmd_vel_reader = reader(&geometry_msgs_msg_dds__Twist__desc,
-                                  options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
+    dds_->cmd_vel_reader =
+        reader(options_.ros2.cmd_vel_stamped ? &geometry_msgs_msg_dds__TwistStamped__desc
+                                             : &geometry_msgs_msg_dds__Twist__desc,
+               options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
     // Reliable, as RViz and `ros2 topic pub` publish it: a one-off pose must not be lost.
     dds_->initialpose_reader =
         reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
@@ -197,6 +235,7 @@ BridgeCounters DdsBridge::counters() const {
   c.commands_received = commands_received_.load();
   c.commands_dropped = commands_dropped_.load();
   c.commands_ignored = commands_ignored_.load();
+  c.commands_stale = commands_stale_.load();
   c.motion_captures_received = motion_captures_received_.load();
   c.requests_received = requests_received_.load();
   c.replies_published = replies_published_.load();
@@ -306,6 +345,9 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.robot_id = c_str(robot_id_);
   state.cycle = s.cycle;
   state.stamp_s = s.stamp_s;
+  const rt::RosTime ros_stamp = rt::to_ros_time(s.ros_stamp_ns);
+  state.ros_stamp_sec = ros_stamp.sec;
+  state.ros_stamp_nanosec = ros_stamp.nanosec;
   state.x_m = s.estimate.pose.x_m;
   state.y_m = s.estimate.pose.y_m;
   state.yaw_rad = s.estimate.pose.yaw_rad;
@@ -314,6 +356,8 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.vx_mps = s.odometry_twist.vx_mps;
   state.vy_mps = s.odometry_twist.vy_mps;
   state.wz_radps = s.odometry_twist.wz_radps;
+  state.has_twist_covariance = s.has_twist_covariance;
+  std::copy(s.twist_covariance.begin(), s.twist_covariance.end(), state.twist_covariance);
   state.cmd_vx_mps = s.command_twist.vx_mps;
   state.cmd_vy_mps = s.command_twist.vy_mps;
   state.cmd_wz_radps = s.command_twist.wz_radps;
@@ -351,19 +395,16 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   modules.modules._release = false;
   check(dds_write(dds_->modules_writer, &modules), "dds_write(module states)");
 
-  if (dds_->odom_writer != 0) {
-    // ROS 2 stamps are system (Unix) time: carry the snapshot's age over to it.
-    timespec real{};
-    clock_gettime(CLOCK_REALTIME, &real);
-    const double age_s = std::max(0.0, monotonic_s() - s.stamp_s);
-    const double stamp = static_cast<double>(real.tv_sec) +
-                         1e-9 * static_cast<double>(real.tv_nsec) - age_s;
-    const double sec = std::floor(stamp);
+  if (options_.ros2.enabled) publish_ros2_state(s);
+}
 
+void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
+  // ROS time of the same instant as stamp_s, mapped by the loop (rt::ClockOffset).
+  const rt::RosTime ros_stamp = rt::to_ros_time(s.ros_stamp_ns);
+  if (dds_->odom_writer != 0) {
     nav_msgs_msg_dds__Odometry_ odom{};
-    odom.header.stamp.sec = static_cast<std::int32_t>(sec);
-    odom.header.stamp.nanosec =
-        std::min(999999999u, static_cast<std::uint32_t>((stamp - sec) * 1e9));
+    odom.header.stamp.sec = ros_stamp.sec;
+    odom.header.stamp.nanosec = ros_stamp.nanosec;
     odom.header.frame_id = c_str(options_.ros2.odom_frame_id);
     odom.child_frame_id = c_str(options_.ros2.base_frame_id);
     odom.pose.pose.position.x = s.estimate.pose.x_m;
@@ -382,7 +423,65 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
     odom.twist.twist.linear.x = s.odometry_twist.vx_mps;
     odom.twist.twist.linear.y = s.odometry_twist.vy_mps;
     odom.twist.twist.angular.z = s.odometry_twist.wz_radps;
+    if (s.has_twist_covariance) {
+      // (vx, vy, wz) sit at rows/columns (0, 1, 5) of ROS's 6x6 as well.
+      constexpr std::array<int, 3> kIndex{0, 1, 5};
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          odom.twist.covariance[kIndex[r] * 6 + kIndex[c]] = s.twist_covariance[r * 3 + c];
+        }
+      }
+    }
     check(dds_write(dds_->odom_writer, &odom), "dds_write(odom)");
+  }
+
+  if (dds_->tf_writer != 0) {
+    geometry_msgs_msg_dds__TransformStamped_ transform{};
+    transform.header.stamp.sec = ros_stamp.sec;
+    transform.header.stamp.nanosec = ros_stamp.nanosec;
+    transform.header.frame_id = c_str(options_.ros2.odom_frame_id);
+    transform.child_frame_id = c_str(options_.ros2.base_frame_id);
+    transform.transform.translation.x = s.estimate.pose.x_m;
+    transform.transform.translation.y = s.estimate.pose.y_m;
+    auto& q = transform.transform.rotation;
+    yaw_to_quaternion(s.estimate.pose.yaw_rad, q.x, q.y, q.z, q.w);
+    tf2_msgs_msg_dds__TFMessage_ tf{};
+    borrow(tf.transforms, &transform, 1);
+    check(dds_write(dds_->tf_writer, &tf), "dds_write(tf)");
+  }
+
+  if (dds_->joint_states_writer != 0) {
+    // Wheel joints, then steering joints, in module order: positions at stamp_s, velocities
+    // the rates fitted over the twist window (absent until the loop has them).
+    const std::uint32_t modules = std::min(s.module_count, kMaxModules);
+    const auto wheels = std::min<std::size_t>(options_.ros2.wheel_joints.size(), modules);
+    const auto steering = std::min<std::size_t>(options_.ros2.steering_joints.size(), modules);
+    std::array<char*, 2 * kMaxModules> names{};
+    std::array<double, 2 * kMaxModules> position{};
+    std::array<double, 2 * kMaxModules> velocity{};
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < wheels; ++i, ++n) {
+      names[n] = c_str(options_.ros2.wheel_joints[i]);
+      position[n] = s.wheel_angle_rad[i];
+      velocity[n] = s.wheel_rate_radps[i];
+    }
+    for (std::size_t i = 0; i < steering; ++i, ++n) {
+      names[n] = c_str(options_.ros2.steering_joints[i]);
+      const double offset = i < options_.ros2.steering_offsets_rad.size()
+                                ? options_.ros2.steering_offsets_rad[i]
+                                : 0.0;
+      position[n] = s.steer_angle_rad[i] + offset;
+      velocity[n] = s.steer_rate_radps[i];
+    }
+    sensor_msgs_msg_dds__JointState_ joints{};
+    joints.header.stamp.sec = ros_stamp.sec;
+    joints.header.stamp.nanosec = ros_stamp.nanosec;
+    joints.header.frame_id = const_cast<char*>("");
+    const auto length = static_cast<std::uint32_t>(n);
+    borrow(joints.name, names.data(), length);
+    borrow(joints.position, position.data(), length);
+    borrow(joints.velocity, velocity.data(), s.has_joint_rates ? length : 0);
+    check(dds_write(dds_->joint_states_writer, &joints), "dds_write(joint states)");
   }
 }
 
@@ -411,6 +510,79 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.last_reload_result = c_str(d.last_reload_result);
   msg.restart_required = d.restart_required;
   check(dds_write(dds_->diagnostics_writer, &msg), "dds_write(diagnostics)");
+  if (dds_->ros2_diagnostics_writer != 0) publish_ros2_diagnostics(d);
+}
+
+// One DiagnosticStatus for the robot: ERROR while the loop holds it in a safe stop, WARN for
+// a transient fault (a command timeout, a rejected command) or a configuration that did not
+// apply, OK otherwise; the values are Diagnostics' fields as text.
+void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
+  constexpr std::uint8_t kOk = 0;
+  constexpr std::uint8_t kWarn = 1;
+  constexpr std::uint8_t kError = 2;
+  std::uint8_t level = kOk;
+  std::string message = "running";
+  if (d.mode == LoopMode::kSafeStop) {
+    level = kError;
+  } else if (d.fault != FaultCode::kNone || !d.last_reload_ok || d.restart_required) {
+    level = kWarn;
+  }
+  if (d.fault != FaultCode::kNone) {
+    message = std::string(d.mode == LoopMode::kSafeStop ? "safe stop: " : "") +
+              fault_code_name(d.fault) +
+              (d.fault_detail.empty() ? "" : " (" + d.fault_detail + ")");
+  } else if (!d.last_reload_ok) {
+    message = "running; last reload rejected";
+  } else if (d.restart_required) {
+    message = "running; a changed setting needs a restart";
+  }
+  const char* mode = d.mode == LoopMode::kIdle          ? "idle"
+                     : d.mode == LoopMode::kVelocity    ? "velocity"
+                     : d.mode == LoopMode::kCalibration ? "calibration"
+                                                        : "safe_stop";
+  const std::vector<std::pair<std::string, std::string>> values{
+      {"mode", mode},
+      {"fault", fault_code_name(d.fault)},
+      {"fault_detail", d.fault_detail},
+      {"fault_count", std::to_string(d.fault_count)},
+      {"uptime_s", fmt::format("{:.1f}", d.uptime_s)},
+      {"loop_rate_hz", fmt::format("{:g}", d.loop_rate_hz)},
+      {"measured_rate_hz", fmt::format("{:.1f}", d.measured_rate_hz)},
+      {"lateness_p99_us", fmt::format("{:.1f}", d.lateness.p99_us)},
+      {"lateness_max_us", fmt::format("{:.1f}", d.lateness.max_us)},
+      {"cycle_time_p99_us", fmt::format("{:.1f}", d.cycle_time.p99_us)},
+      {"cycle_time_max_us", fmt::format("{:.1f}", d.cycle_time.max_us)},
+      {"cycles", std::to_string(d.cycles)},
+      {"overruns", std::to_string(d.overruns)},
+      {"hardware_plugin", d.hardware_plugin},
+      {"drivetrain_plugin", d.drivetrain_plugin},
+      {"localization_plugin", d.localization_plugin},
+      {"commands_received", std::to_string(commands_received_.load(std::memory_order_relaxed))},
+      {"commands_dropped", std::to_string(commands_dropped_.load(std::memory_order_relaxed))},
+      {"commands_stale", std::to_string(commands_stale_.load(std::memory_order_relaxed))},
+      {"reload_count", std::to_string(d.reload_count)},
+      {"last_reload", d.last_reload_result},
+      {"restart_required", d.restart_required ? "true" : "false"}};
+  std::vector<diagnostic_msgs_msg_dds__KeyValue_> pairs(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    pairs[i].key = c_str(values[i].first);
+    pairs[i].value = c_str(values[i].second);
+  }
+  const std::string name = "swiveld: " + robot_id_;
+  diagnostic_msgs_msg_dds__DiagnosticStatus_ status{};
+  status.level = level;
+  status.name = c_str(name);
+  status.message = c_str(message);
+  status.hardware_id = c_str(robot_id_);
+  borrow(status.values, pairs.data(), static_cast<std::uint32_t>(pairs.size()));
+
+  diagnostic_msgs_msg_dds__DiagnosticArray_ array{};
+  const rt::RosTime now = rt::to_ros_time(realtime_now_ns());
+  array.header.stamp.sec = now.sec;
+  array.header.stamp.nanosec = now.nanosec;
+  array.header.frame_id = const_cast<char*>("");
+  borrow(array.status, &status, 1);
+  check(dds_write(dds_->ros2_diagnostics_writer, &array), "dds_write(ros2 diagnostics)");
 }
 
 void DdsBridge::publish_calibration(const CalibrationSample& sample) {
@@ -504,9 +676,37 @@ void DdsBridge::take_commands() {
 void DdsBridge::take_ros2_commands() {
   if (dds_->cmd_vel_reader == 0) return;
   // ROS 2 topics are per robot through their namespace: no robot id to check.
-  take_all<geometry_msgs_msg_dds__Twist_>(
-      dds_->cmd_vel_reader, [this](const geometry_msgs_msg_dds__Twist_& t) {
-        deliver_command({t.linear.x, t.linear.y, t.angular.z});
+  if (!options_.ros2.cmd_vel_stamped) {
+    take_all<geometry_msgs_msg_dds__Twist_>(
+        dds_->cmd_vel_reader, [this](const geometry_msgs_msg_dds__Twist_& t) {
+          deliver_command({t.linear.x, t.linear.y, t.angular.z});
+        });
+    return;
+  }
+  take_all<geometry_msgs_msg_dds__TwistStamped_>(
+      dds_->cmd_vel_reader, [this](const geometry_msgs_msg_dds__TwistStamped_& m) {
+        const auto& stamp = m.header.stamp;
+        if (stamp.sec != 0 || stamp.nanosec != 0) {
+          // A stamp too far from now either way (an old command, a sender's clock off) is
+          // stale; a zero stamp is "now", as ros2_controllers' diff_drive_controller takes it.
+          const std::int64_t stamp_ns =
+              static_cast<std::int64_t>(stamp.sec) * 1'000'000'000 + stamp.nanosec;
+          const double age_s = 1e-9 * static_cast<double>(realtime_now_ns() - stamp_ns);
+          if (!(std::abs(age_s) <= options_.ros2.cmd_vel_max_age_s)) {
+            if (commands_stale_.fetch_add(1, std::memory_order_relaxed) == 0) {
+              spdlog::warn(
+                  "dds: {}: dropped a TwistStamped {:.3f} s from now (more than "
+                  "cmd_vel_max_age_s {} s); further ones are counted in diagnostics",
+                  options_.ros2.cmd_vel_topic(), age_s, options_.ros2.cmd_vel_max_age_s);
+            }
+            return;
+          }
+        } else if (!warned_zero_stamp_) {
+          warned_zero_stamp_ = true;
+          spdlog::warn("dds: {}: TwistStamped with a zero stamp taken as sent now",
+                       options_.ros2.cmd_vel_topic());
+        }
+        deliver_command({m.twist.linear.x, m.twist.linear.y, m.twist.angular.z});
       });
 }
 

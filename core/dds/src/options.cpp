@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
 
 namespace swivel::dds {
@@ -42,6 +43,18 @@ std::string Ros2Options::initialpose_topic() const {
   return ros2_topic(ros_namespace, "initialpose");
 }
 
+std::string Ros2Options::joint_states_topic() const {
+  return ros2_topic(ros_namespace, "joint_states");
+}
+
+std::string Ros2Options::tf_topic() const {
+  return "rt/tf";
+}
+
+std::string Ros2Options::diagnostics_topic() const {
+  return "rt/diagnostics";
+}
+
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir) {
   ParamReader reader(node, file, "dds");
@@ -73,9 +86,61 @@ DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
   options.ros2.ros_namespace = ros_namespace;
   options.ros2.odom_frame_id = ros2.string_or("odom_frame_id", "odom");
   options.ros2.base_frame_id = ros2.string_or("base_frame_id", "base_link");
+  options.ros2.publish_tf = ros2.boolean_or("publish_tf", true);
+  options.ros2.cmd_vel_stamped = ros2.boolean_or("cmd_vel_stamped", false);
+  options.ros2.cmd_vel_max_age_s = ros2.number_or("cmd_vel_max_age_s", 0.5, 0.001, 60.0);
+  const auto names = [&](const char* key, std::vector<std::string>& out) {
+    const YAML::Node list = ros2.sequence(key);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      if (!list[i].IsScalar() || list[i].Scalar().empty()) {
+        ros2.fail(key, "expected a list of joint names, got a non-text or empty entry at index " +
+                           std::to_string(i));
+      }
+      out.push_back(list[i].Scalar());
+    }
+  };
+  names("wheel_joints", options.ros2.wheel_joints);
+  names("steering_joints", options.ros2.steering_joints);
   ros2.finish();
   reader.finish();
   return options;
+}
+
+void complete_joints(const RobotModel& robot, const std::string& file, Ros2Options& ros2) {
+  const std::size_t modules = robot.module_count();
+  const bool steered = robot.drivetrain == DrivetrainKind::kSwpc;
+  if (ros2.wheel_joints.empty()) {
+    if (steered) {
+      for (std::size_t i = 1; i <= modules; ++i) {
+        ros2.wheel_joints.push_back("module_" + std::to_string(i) + "_wheel_joint");
+      }
+    } else {
+      ros2.wheel_joints = {"left_wheel_joint", "right_wheel_joint"};
+    }
+  }
+  if (ros2.steering_joints.empty() && steered) {
+    for (std::size_t i = 1; i <= modules; ++i) {
+      ros2.steering_joints.push_back("module_" + std::to_string(i) + "_steering_joint");
+    }
+  }
+  const std::string robot_text = "robot '" + robot.name + "' (" + robot.source_file + ")";
+  if (ros2.wheel_joints.size() != modules) {
+    throw ConfigError(file + ": dds.ros2.wheel_joints: expected " + std::to_string(modules) +
+                      " names, one per module of " + robot_text + ", got " +
+                      std::to_string(ros2.wheel_joints.size()));
+  }
+  const std::size_t steering = steered ? modules : 0;
+  if (ros2.steering_joints.size() != steering) {
+    throw ConfigError(file + ": dds.ros2.steering_joints: expected " + std::to_string(steering) +
+                      " names" + (steered ? ", one per module of " : " for ") + robot_text +
+                      ", got " + std::to_string(ros2.steering_joints.size()));
+  }
+  ros2.steering_offsets_rad.clear();
+  if (steered) {
+    for (const SwpcModuleParams& m : robot.modules) {
+      ros2.steering_offsets_rad.push_back(m.steering_offset_rad);
+    }
+  }
 }
 
 }  // namespace swivel::dds

@@ -57,6 +57,7 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
       handlers_(std::make_unique<RequestHandlers>()),
       loader_(plugin_search_path(config_)) {
   dds_options_ = dds::parse_dds_options(config_.dds, config_.file, config_.config_dir);
+  dds::complete_joints(config_.robot, config_.file, dds_options_.ros2);
   robot_model_text_ = read_text(config_.robot_model_path);
   status_period_s_ = config_.status_period_s;
   PluginSet plugins = assemble_plugins(loader_, config_);
@@ -98,6 +99,8 @@ void Daemon::start() {
   loop_options.stop_linear_deceleration_mps2 = config_.controlled_stop.linear_deceleration_mps2;
   loop_options.stop_angular_deceleration_radps2 =
       config_.controlled_stop.angular_deceleration_radps2;
+  loop_options.twist_window_s = config_.twist_window_s;
+  rt::set_encoder_resolutions(config_.robot, loop_options);
   loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
                                             localization_->active(),
                                             config_.localization.plugin.c_str());
@@ -180,11 +183,14 @@ void Daemon::start_bridge() {
                                              std::move(callbacks));
   bridge_->start();
   spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
-               dds_options_.domain_id,
-               dds::resolve_config(dds_options_.config_uri).description,
+               dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,
                dds_options_.publish_rate_hz,
-               dds_options_.ros2.enabled ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic()
-                                         : std::string());
+               dds_options_.ros2.enabled
+                   ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic() +
+                         (dds_options_.ros2.publish_tf ? ", " + dds_options_.ros2.tf_topic() : "") +
+                         ", " + dds_options_.ros2.joint_states_topic() + ", " +
+                         dds_options_.ros2.diagnostics_topic()
+                   : std::string());
 }
 
 dds::ReplySample Daemon::handle_request(const dds::RequestSample& request) {
@@ -264,7 +270,8 @@ ReloadResult Daemon::reload(const std::string& trigger) {
   spdlog::info("reloading {} ({})", config_.file, trigger);
   try {
     DaemonConfig fresh = load_daemon_config(config_.file);
-    (void)dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
+    dds::DdsOptions fresh_dds = dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
+    dds::complete_joints(fresh.robot, fresh.file, fresh_dds.ros2);
     const ReloadPlan plan =
         plan_reload(config_, robot_model_text_, fresh, read_text(fresh.robot_model_path));
 

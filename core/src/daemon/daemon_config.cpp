@@ -133,6 +133,21 @@ DaemonConfig parse_daemon_config(const std::string& yaml_text, const std::string
       "angular_deceleration_radps2", c.controlled_stop.angular_deceleration_radps2, 0.01, 1000.0);
   stop.finish();
 
+  ParamReader odometry = top.child("odometry");
+  {
+    // At least the one-cycle difference, at most what the loop's window holds.
+    const double period_s = 1.0 / c.rate_hz;
+    c.twist_window_s = odometry.number_or("twist_window_s", c.twist_window_s, 0.0, 1.0e3);
+    if (c.twist_window_s < period_s * (1.0 - 1e-9) ||
+        c.twist_window_s > 255.0 * period_s * (1.0 + 1e-9)) {
+      std::ostringstream message;
+      message << "expected a number of seconds in [" << period_s << ", " << 255.0 * period_s
+              << "] (1 to 255 periods of loop.rate_hz), got " << c.twist_window_s;
+      odometry.fail("twist_window_s", message.str());
+    }
+  }
+  odometry.finish();
+
   const YAML::Node paths = top.sequence("plugin_path");
   for (std::size_t i = 0; i < paths.size(); ++i) {
     if (!paths[i].IsScalar() || paths[i].Scalar().empty()) {

@@ -48,6 +48,7 @@ dds::DiagnosticsSample DiagnosticsSource::read() {
   d.cycles = timing.cycles;
   d.overruns = timing.overruns;
   d.fault_count = s.fault_count;
+  d.mode = s.mode;
   d.fault = s.fault;
   d.fault_detail = s.fault_detail.data();
   d.hardware_plugin = hardware_plugin_;

@@ -62,6 +62,7 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
           running.controlled_stop.angular_deceleration_radps2) {
     restart.push_back("controlled_stop");
   }
+  if (fresh.twist_window_s != running.twist_window_s) restart.push_back("odometry");
   plan.swap_localization = !same_slot(fresh.localization, running.localization);
   if (fresh.log_level != running.log_level) plan.log_level = fresh.log_level;
   if (fresh.status_period_s != running.status_period_s) {

@@ -1,11 +1,14 @@
 #include "swivel/rt/control_loop.hpp"
 
+#include <time.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <numbers>
 #include <span>
 #include <stdexcept>
 #include <system_error>
-#include <time.h>
 
 namespace swivel::rt {
 namespace {
@@ -90,7 +93,41 @@ MotionLimits stop_limits(const LoopOptions& options) {
 constexpr double kFollowFloorMps = 0.02;
 constexpr double kFollowFloorRadps = 0.02;
 
+TwistWindowOptions twist_window_options(const LoopOptions& options) {
+  TwistWindowOptions o;
+  o.readings = twist_window_readings(options);
+  o.wheel_resolution_rad = options.wheel_encoder_resolution_rad;
+  o.steer_resolution_rad = options.steer_encoder_resolution_rad;
+  return o;
+}
+
 }  // namespace
+
+std::size_t twist_window_readings(const LoopOptions& options) {
+  // An invalid rate is the constructor's to report.
+  if (!std::isfinite(options.rate_hz) || !(options.rate_hz > 0.0)) return 2;
+  const double periods = options.twist_window_s * options.rate_hz;
+  if (!std::isfinite(periods) || !(options.twist_window_s > 0.0) ||
+      periods > static_cast<double>(kMaxTwistWindowReadings - 1)) {
+    throw std::invalid_argument("twist_window_s must be finite, positive and at most " +
+                                std::to_string(kMaxTwistWindowReadings - 1) +
+                                " loop periods, got " + std::to_string(options.twist_window_s) +
+                                " s at " + std::to_string(options.rate_hz) + " Hz");
+  }
+  return std::max<std::size_t>(2, static_cast<std::size_t>(std::llround(periods)) + 1);
+}
+
+void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept {
+  const SensorParams& sensors = robot.sensors;
+  options.wheel_encoder_resolution_rad =
+      sensors.wheel_encoder_counts_per_rev > 0
+          ? 2.0 * std::numbers::pi / sensors.wheel_encoder_counts_per_rev
+          : 0.0;
+  options.steer_encoder_resolution_rad =
+      robot.drivetrain == DrivetrainKind::kSwpc && sensors.steering_encoder_counts_per_rev > 0
+          ? 2.0 * std::numbers::pi / sensors.steering_encoder_counts_per_rev
+          : 0.0;
+}
 
 ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
                          Localization& localization, const char* localization_name)
@@ -103,6 +140,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       active_localization_(&localization),
       timing_(1.0 / options.rate_hz),
       odometry_monitor_(options.odometry_check),
+      twist_window_(twist_window_options(options)),
       command_limiter_(options.limits),
       stop_limiter_(stop_limits(options)) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
@@ -112,6 +150,10 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   if (!std::isfinite(options.command_timeout_s) || options.command_timeout_s <= 0.0) {
     throw std::invalid_argument("command timeout_s must be finite and positive, got " +
                                 std::to_string(options.command_timeout_s));
+  }
+  if (!std::isfinite(options.clock_offset_refresh_s) || !(options.clock_offset_refresh_s > 0.0)) {
+    throw std::invalid_argument("clock_offset_refresh_s must be finite and positive, got " +
+                                std::to_string(options.clock_offset_refresh_s));
   }
   if (!OdometryMonitor::valid(options.odometry_check)) {
     throw std::invalid_argument(
@@ -128,6 +170,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
   state_.estimate = localization.estimate();
+  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(state_.stamp_s);
   snapshot_.write(state_);
 }
 
@@ -146,6 +189,15 @@ std::vector<std::string> ControlLoop::start() {
   }
   stop_requested_.store(false, std::memory_order_release);
   log_.start();
+  const auto refresh = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.clock_offset_refresh_s));
+  clock_thread_ = std::jthread([this, refresh](const std::stop_token& stop) {
+    std::unique_lock lock(clock_mutex_);
+    while (!clock_wake_.wait_for(lock, stop, refresh, [] { return false; })) {
+      if (stop.stop_requested()) return;
+      clock_offset_.refresh();
+    }
+  });
   std::promise<std::string> scheduling;
   auto scheduling_warning = scheduling.get_future();
   running_.store(true, std::memory_order_release);
@@ -153,6 +205,7 @@ std::vector<std::string> ControlLoop::start() {
     thread_ = std::thread([this, &scheduling] { thread_main(scheduling); });
   } catch (...) {
     running_.store(false, std::memory_order_release);
+    clock_thread_ = std::jthread();  // requests its stop and joins
     log_.stop();
     dma_latency_.release();
     throw;
@@ -165,6 +218,8 @@ void ControlLoop::stop() noexcept {
   if (!thread_.joinable()) return;
   stop_requested_.store(true, std::memory_order_release);
   thread_.join();
+  clock_thread_.request_stop();
+  if (clock_thread_.joinable()) clock_thread_.join();
   log_.stop();
   dma_latency_.release();
   running_.store(false, std::memory_order_release);
@@ -624,7 +679,11 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     // Paused for a lifecycle call off the loop: no hardware call; the robot is stopped.
     ++state_.cycle;
     state_.stamp_s = now_s;
+    state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
     state_.odometry_twist = Twist2{};
+    state_.has_twist_covariance = false;
+    state_.twist_covariance = {};
+    state_.has_joint_rates = false;
     state_.command_twist = Twist2{};
     snapshot_.write(state_);
     last_cycle_s_ = now_s;
@@ -684,13 +743,25 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     current_.motion_capture = newest_sample;
   }
 
-  // Odometry and localization.
+  // Odometry and localization. The twist window goes first: its forward kinematics calls
+  // leave the drivetrain's module states to the cycle's own call.
   OdometryIncrement odometry;
+  bool twist_ok = false;
+  if (reading_ok) {
+    if (!has_previous_) twist_window_.reset();
+    twist_window_.push(current_);
+  }
   if (reading_ok && has_previous_) {
+    // A refusal here is no fault: the cycle's own forward() below decides that.
+    twist_ok = guarded([&] { return twist_window_.estimate(drivetrain_, twist_estimate_); },
+                       thrown) == Status::kOk;
     if (guarded([&] { return drivetrain_.forward(previous_, current_, odometry); }, thrown) !=
         Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
                   thrown != nullptr ? thrown : drivetrain_.last_error());
+      // An encoder jump must not stay in the window once the fault is cleared.
+      twist_window_.reset();
+      twist_ok = false;
     } else if (guarded([&] { return localization.update(odometry, current_); }, thrown) !=
                Status::kOk) {
       raise_fault(FaultCode::kLocalizationError, now_s,
@@ -803,8 +874,21 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   // Publish.
   ++state_.cycle;
   state_.stamp_s = now_s;
+  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
   state_.estimate = publishable(localization.estimate());
-  state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
+  if (twist_ok) {
+    state_.odometry_twist = twist_estimate_.twist;
+    state_.twist_covariance = twist_estimate_.covariance;
+    state_.has_twist_covariance = twist_estimate_.has_covariance;
+    state_.wheel_rate_radps = twist_estimate_.wheel_rate_radps;
+    state_.steer_rate_radps = twist_estimate_.steer_rate_radps;
+    state_.has_joint_rates = true;
+  } else {
+    state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
+    state_.twist_covariance = {};
+    state_.has_twist_covariance = false;
+    state_.has_joint_rates = false;
+  }
   state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
   state_.command_twist = applied;
   state_.gyro_wz_radps = reading_ok && current_.gyro_valid ? current_.gyro_wz_radps : 0.0;

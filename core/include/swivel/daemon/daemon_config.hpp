@@ -62,6 +62,9 @@ struct DaemonConfig {
 
   CommandConfig command;
   ControlledStopConfig controlled_stop;
+  /// odometry.twist_window_s: the published twist is fitted over the readings of this
+  /// window (rt::LoopOptions::twist_window_s); one loop period to 255 periods.
+  double twist_window_s = 0.02;
   std::vector<std::string> plugin_path;  ///< searched before the default search path
   std::string log_level = "info";        ///< spdlog level name
   double status_period_s = 1.0;          ///< status line period on stdout

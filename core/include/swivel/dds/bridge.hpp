@@ -1,7 +1,8 @@
 #pragma once
 // The daemon's DDS side. A publisher thread reads the loop's newest state snapshot at the
-// publish rate and writes RobotState, ModuleStates (and ROS 2 odometry when enabled); it
-// writes Diagnostics at the diagnostics rate. A subscriber thread waits on the command
+// publish rate and writes RobotState, ModuleStates (and, with ROS 2 enabled, odometry, the
+// odom -> base transform and joint states); it writes Diagnostics (and ROS 2's
+// DiagnosticArray) at the diagnostics rate. A subscriber thread waits on the command
 // readers and hands each accepted sample to a callback, which the daemon wires into the
 // loop's lock-free rings or its request queue. Requests (Request, SetPose) are answered with
 // publish_reply(). The bridge knows nothing of the loop beyond these callbacks.
@@ -44,6 +45,7 @@ struct DiagnosticsSample {
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
   std::uint64_t fault_count = 0;
+  LoopMode mode = LoopMode::kIdle;  ///< the loop's mode (ROS 2 diagnostics level)
   FaultCode fault = FaultCode::kNone;
   std::string fault_detail;         ///< the active fault's cause ("" when healthy)
   std::string hardware_plugin;
@@ -116,6 +118,7 @@ struct BridgeCounters {
   std::uint64_t commands_received = 0;   ///< accepted by on_command
   std::uint64_t commands_dropped = 0;    ///< refused by on_command, or no callback
   std::uint64_t commands_ignored = 0;    ///< addressed to another robot
+  std::uint64_t commands_stale = 0;      ///< ROS 2 TwistStamped older than cmd_vel_max_age_s
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;   ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
@@ -157,6 +160,8 @@ class DdsBridge {
   void subscribe_loop(const std::stop_token& stop);
   void publish_state(const StateSnapshot& snapshot);
   void publish_diagnostics(const DiagnosticsSample& sample);
+  void publish_ros2_state(const StateSnapshot& snapshot);
+  void publish_ros2_diagnostics(const DiagnosticsSample& sample);
   void take_commands();
   void take_ros2_commands();
   void take_motion_capture();
@@ -176,10 +181,12 @@ class DdsBridge {
   std::atomic<std::uint64_t> commands_received_{0};
   std::atomic<std::uint64_t> commands_dropped_{0};
   std::atomic<std::uint64_t> commands_ignored_{0};
+  std::atomic<std::uint64_t> commands_stale_{0};
   std::atomic<std::uint64_t> motion_captures_received_{0};
   std::atomic<std::uint64_t> requests_received_{0};
   std::atomic<std::uint64_t> replies_published_{0};
   std::uint64_t next_command_sequence_ = 0;  ///< subscriber thread only
+  bool warned_zero_stamp_ = false;           ///< subscriber thread only
 };
 
 /// Fills a ROS 2 style quaternion (x, y, z, w) for a rotation of `yaw_rad` about z.

@@ -5,17 +5,38 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
+
+#include "swivel/robot_model.hpp"
 
 namespace swivel::dds {
 
-/// ROS 2 compatibility: odometry as nav_msgs/Odometry on rt/<namespace>/odom,
-/// geometry_msgs/Twist commands from rt/<namespace>/cmd_vel and
+/// ROS 2 compatibility (README "ROS 2 tools without a bridge"): odometry as
+/// nav_msgs/Odometry on rt/<namespace>/odom, the odom -> base transform on rt/tf, joint
+/// states on rt/<namespace>/joint_states, diagnostic_msgs/DiagnosticArray on rt/diagnostics,
+/// geometry_msgs/Twist (or TwistStamped) commands from rt/<namespace>/cmd_vel and
 /// geometry_msgs/PoseWithCovarianceStamped poses from rt/<namespace>/initialpose.
 struct Ros2Options {
   bool enabled = false;
   std::string ros_namespace;               ///< "" or e.g. "robot1" (no leading/trailing '/')
   std::string odom_frame_id = "odom";      ///< header.frame_id of the odometry
   std::string base_frame_id = "base_link"; ///< child_frame_id of the odometry
+  /// Publish odom_frame_id -> base_frame_id on rt/tf (off when another node, e.g.
+  /// robot_localization, publishes that transform).
+  bool publish_tf = true;
+  /// rt/cmd_vel carries geometry_msgs/TwistStamped instead of Twist.
+  bool cmd_vel_stamped = false;
+  /// TwistStamped commands whose stamp (ROS time) is further than this from the host's
+  /// realtime clock, s, are dropped as stale (a zero stamp counts as "now").
+  double cmd_vel_max_age_s = 0.5;
+  /// rt/joint_states: one wheel joint per module, in module order, and for steered (swpc)
+  /// modules one steering joint each; the daemon fills both from the robot model when the
+  /// configuration names none (wheel_joints / steering_joints). Empty: no joint states.
+  std::vector<std::string> wheel_joints;
+  std::vector<std::string> steering_joints;
+  /// Not from YAML: each module's steering offset (robot model), added to the measured
+  /// steering angle so that a steering joint's position is the true angle.
+  std::vector<double> steering_offsets_rad;
 
   /// "rt/odom" or "rt/<namespace>/odom".
   [[nodiscard]] std::string odom_topic() const;
@@ -23,6 +44,12 @@ struct Ros2Options {
   [[nodiscard]] std::string cmd_vel_topic() const;
   /// "rt/initialpose" or "rt/<namespace>/initialpose".
   [[nodiscard]] std::string initialpose_topic() const;
+  /// "rt/joint_states" or "rt/<namespace>/joint_states".
+  [[nodiscard]] std::string joint_states_topic() const;
+  /// "rt/tf": ROS 2's /tf is absolute (frame ids, not namespaces, tell robots apart).
+  [[nodiscard]] std::string tf_topic() const;
+  /// "rt/diagnostics": absolute like ROS 2's /diagnostics (hardware_id names the robot).
+  [[nodiscard]] std::string diagnostics_topic() const;
 };
 
 struct DdsOptions {
@@ -44,5 +71,12 @@ struct DdsOptions {
 ///         "swiveld.yaml:40:20: dds.publish_rate_hz: expected a number in [1, 1000], got 0"
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir);
+
+/// Completes the ROS 2 joint layout from the robot model: default joint names when the
+/// configuration names none (differential: left_wheel_joint, right_wheel_joint; swpc:
+/// module_<i>_wheel_joint and module_<i>_steering_joint, i from 1) and the steering offsets.
+/// @throws ConfigError naming `file` and the key when the named joints do not match the
+///         robot's modules.
+void complete_joints(const RobotModel& robot, const std::string& file, Ros2Options& ros2);
 
 }  // namespace swivel::dds

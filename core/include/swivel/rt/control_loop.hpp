@@ -50,9 +50,12 @@
 // now_s().
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <future>
 #include <limits>
+#include <mutex>
+#include <stop_token>
 #include <string>
 #include <thread>
 #include <vector>
@@ -62,6 +65,7 @@
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
+#include "swivel/rt/clock_offset.hpp"
 #include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/odometry_monitor.hpp"
 #include "swivel/rt/realtime.hpp"
@@ -70,6 +74,7 @@
 #include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/rt/timing_stats.hpp"
+#include "swivel/rt/twist_window.hpp"
 
 namespace swivel::rt {
 
@@ -88,7 +93,28 @@ struct LoopOptions {
   /// daemon sets them from swiveld.yaml `controlled_stop:`.
   double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
   double stop_angular_deceleration_radps2 = std::numeric_limits<double>::infinity();
+  /// The published twist (StateSnapshot::odometry_twist) is fitted over the readings of the
+  /// last twist_window_s (N = twist_window_s * rate_hz + 1 readings, at most
+  /// kMaxTwistWindowReadings; one period gives the one-cycle difference): see TwistWindow.
+  /// It refers to twist_window_s / 2 before the cycle's reading.
+  double twist_window_s = 0.02;
+  /// One wheel and one steering encoder count, rad, for the twist covariance (0: unknown,
+  /// and then no covariance is published). The daemon takes them from the robot model.
+  double wheel_encoder_resolution_rad = 0.0;
+  double steer_encoder_resolution_rad = 0.0;
+  /// How often a non-real-time thread re-measures the offset of the realtime clock (ROS
+  /// time) from the loop's monotonic clock, s (see ClockOffset).
+  double clock_offset_refresh_s = 1.0;
 };
+
+/// Readings in the twist window of `options` (TwistWindowOptions::readings).
+/// @throws std::invalid_argument when the window is not finite and positive or needs more
+///         than kMaxTwistWindowReadings readings.
+std::size_t twist_window_readings(const LoopOptions& options);
+
+/// Sets the encoder resolutions of `options` from the robot model's sensors (one count:
+/// 2 pi / counts per revolution; the steering only for an swpc robot).
+void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept;
 
 /// How a hot swap the loop took ended (take_retired_localization()).
 struct SwapOutcome {
@@ -132,9 +158,9 @@ class ControlLoop {
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
 
-  /// Not real-time safe. Applies real-time settings where permitted, starts the log thread
-  /// and the loop thread, and returns one line per setting that was refused (the loop then
-  /// runs SCHED_OTHER and/or without locked memory).
+  /// Not real-time safe. Applies real-time settings where permitted, starts the log thread,
+  /// the clock-offset thread and the loop thread, and returns one line per setting that was refused
+  /// (the loop then runs SCHED_OTHER and/or without locked memory).
   /// @throws std::system_error when a thread cannot be created; std::logic_error when
   ///         already running.
   std::vector<std::string> start();
@@ -270,6 +296,11 @@ class ControlLoop {
   /// Any thread. Real-time safe. CLOCK_MONOTONIC, seconds: the clock of `received_s`.
   [[nodiscard]] double now_s() const noexcept { return monotonic_s(); }
 
+  /// Any thread. The offset that maps the loop's stamps to ROS time
+  /// (StateSnapshot::ros_stamp_ns): measured at construction, refreshed every
+  /// clock_offset_refresh_s by a thread of its own while the loop runs.
+  [[nodiscard]] const ClockOffset& clock_offset() const noexcept { return clock_offset_; }
+
   /// Any thread. Real-time safe. The loop period, seconds.
   [[nodiscard]] double period_s() const noexcept { return period_s_; }
 
@@ -358,6 +389,8 @@ class ControlLoop {
   FaultDetail latched_detail_{};                  // cause of latched_fault_
   FaultDetail transient_detail_{};                // cause of transient_fault_
   OdometryMonitor odometry_monitor_;
+  TwistWindow twist_window_;
+  TwistEstimate twist_estimate_{};
   motion::TwistLimiter command_limiter_;  // the robot model's limits
   motion::TwistLimiter stop_limiter_;     // the same, with the stop deceleration
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
@@ -370,6 +403,10 @@ class ControlLoop {
   bool clear_pending_ = false;    // a request_clear() taken this cycle
 
   // Non-real-time ownership.
+  ClockOffset clock_offset_;
+  std::mutex clock_mutex_;
+  std::condition_variable_any clock_wake_;
+  std::jthread clock_thread_;
   std::thread thread_;
   CpuDmaLatencyRequest dma_latency_;
 };

@@ -65,8 +65,18 @@ using FaultDetail = std::array<char, 64>;
 struct StateSnapshot {
   std::uint64_t cycle = 0;
   double stamp_s = 0.0;          ///< monotonic time of the cycle's reading
+  /// stamp_s in ROS time: CLOCK_REALTIME (Unix time), ns, through the loop's measured
+  /// offset of the realtime clock from the monotonic one (rt::ClockOffset).
+  std::int64_t ros_stamp_ns = 0;
   PoseEstimate estimate;         ///< localization output, world frame
-  Twist2 odometry_twist;         ///< body twist from forward kinematics, robot frame
+  /// Body twist from the encoders (the drivetrain's forward kinematics over the loop's
+  /// twist window, see TwistWindow), robot frame; it refers to half the window before
+  /// stamp_s.
+  Twist2 odometry_twist;
+  /// Covariance of odometry_twist from the encoders' quantization, row-major over (vx, vy,
+  /// wz): m^2/s^2, m rad/s^2, rad^2/s^2.
+  std::array<double, 9> twist_covariance{};
+  bool has_twist_covariance = false;
   Twist2 command_twist;          ///< twist applied this cycle after limits, robot frame
   double odometry_residual = 0.0;
   double gyro_wz_radps = 0.0;
@@ -84,6 +94,11 @@ struct StateSnapshot {
   /// measured steering angles, rad, per module.
   std::array<double, kMaxModules> wheel_angle_rad{};
   std::array<double, kMaxModules> steer_angle_rad{};
+  /// The encoder rates behind odometry_twist: each module's wheel and steering rate, rad/s,
+  /// fitted over the twist window (they refer to its middle); valid with has_joint_rates.
+  std::array<double, kMaxModules> wheel_rate_radps{};
+  std::array<double, kMaxModules> steer_rate_radps{};
+  bool has_joint_rates = false;
   /// The hardware is in its error state: on_error() was called and no clear has succeeded
   /// since (a clear re-activates it first).
   bool hardware_in_error = false;

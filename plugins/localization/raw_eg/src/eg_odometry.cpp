@@ -15,6 +15,7 @@ void EgOdometry::reset(const Pose2& pose) noexcept {
   yaw_rad_ = pose.yaw_rad;
   distance_m_ = 0.0;
   last_used_gyro_ = false;
+  last_chord_yaw_rad_ = pose.yaw_rad;
 }
 
 bool EgOdometry::step(const Pose2& delta, double dt_s, double gyro_wz_radps,
@@ -37,6 +38,7 @@ bool EgOdometry::step(const Pose2& delta, double dt_s, double gyro_wz_radps,
   yaw_rad_ += dyaw_rad;
   distance_m_ += std::hypot(delta.x_m, delta.y_m);
   last_used_gyro_ = use_gyro;
+  last_chord_yaw_rad_ = chord_yaw_rad;
   return true;
 }
 

@@ -51,6 +51,8 @@ class EgOdometry {
   [[nodiscard]] double distance_m() const noexcept { return distance_m_; }
   /// True when the last step took its heading from the gyro.
   [[nodiscard]] bool last_step_used_gyro() const noexcept { return last_used_gyro_; }
+  /// The heading the last step turned its translation into the world frame by (unwrapped).
+  [[nodiscard]] double last_chord_yaw_rad() const noexcept { return last_chord_yaw_rad_; }
 
  private:
   EgConfig config_{};
@@ -59,6 +61,7 @@ class EgOdometry {
   double yaw_rad_ = 0.0;
   double distance_m_ = 0.0;
   bool last_used_gyro_ = false;
+  double last_chord_yaw_rad_ = 0.0;
 };
 
 }  // namespace swivel::localization

@@ -1,0 +1,124 @@
+// swiveld with dds.ros2 enabled, read by subscribers of the ROS 2 types as a ROS 2 node on
+// the domain would create them: the odometry, its transform and the joint states come from
+// the same loop cycles and carry the same ROS time; the joint names follow the robot model;
+// the diagnostics name the robot. DDS domain 81.
+
+#include <gtest/gtest.h>
+#include <time.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "process_util.hpp"
+#include "ros2_interfaces.h"
+#include "swivel/dds/topics.hpp"
+
+namespace swivel::test {
+namespace {
+
+constexpr int kDomain = 81;
+
+std::int64_t stamp_ns(const builtin_interfaces_msg_dds__Time_& t) {
+  return static_cast<std::int64_t>(t.sec) * 1'000'000'000 + t.nanosec;
+}
+
+// Takes every sample available from `reader`, calling `fn` on the valid ones.
+template <typename T, typename Fn>
+void take_all(dds_entity_t reader, Fn&& fn) {
+  for (;;) {
+    void* samples[1] = {nullptr};
+    dds_sample_info_t info{};
+    if (dds_take(reader, samples, &info, 1, 1) <= 0) return;
+    if (info.valid_data) fn(*static_cast<const T*>(samples[0]));
+    dds_return_loan(reader, samples, 1);
+  }
+}
+
+TEST(SwiveldRos2, OdometryTransformJointStatesAndDiagnosticsFromOneDaemon) {
+  const std::string dir = make_test_dir("ros2");
+  const std::string config = dir + "/swiveld.yaml";
+  std::ofstream(config)
+      << "loop: {rate_hz: 500, realtime: false}\n"
+      << "robot_model: " << source_dir() << "/config/robots/docent.yaml\n"
+      << "hardware: {plugin: sim}\n"
+      << "drivetrain: {plugin: differential}\n"
+      << "localization: {plugin: raw_eg}\n"
+      << "command:\n  source: script\n  script:\n"
+      << "    - {vx_mps: 0.3, wz_radps: 0.2, duration_s: 100}\n"
+      << "dds:\n  domain_id: " << kDomain << "\n  config: " << source_dir()
+      << "/config/dds/loopback.xml\n  diagnostics_rate_hz: 10\n"
+      << "  ros2: {enabled: true, namespace: it_ros2, odom_frame_id: it_ros2/odom,"
+      << " base_frame_id: it_ros2/base_link}\n";
+  Child daemon(swiveld_exe(), {"--config", config});
+
+  dds::Participant client({static_cast<std::uint32_t>(kDomain), dds::tool_config_uri()});
+  const dds::QosPtr qos = dds::default_qos(100);
+  const auto reader = [&](const dds_topic_descriptor_t* desc, const char* name) {
+    const dds_entity_t topic = dds::create_topic(client.handle(), desc, name);
+    return dds_create_reader(client.handle(), topic, qos.get(), nullptr);
+  };
+  const dds_entity_t odom = reader(&nav_msgs_msg_dds__Odometry__desc, "rt/it_ros2/odom");
+  const dds_entity_t tf = reader(&tf2_msgs_msg_dds__TFMessage__desc, "rt/tf");
+  const dds_entity_t joints =
+      reader(&sensor_msgs_msg_dds__JointState__desc, "rt/it_ros2/joint_states");
+  const dds_entity_t diagnostics =
+      reader(&diagnostic_msgs_msg_dds__DiagnosticArray__desc, "rt/diagnostics");
+
+  std::set<std::int64_t> odom_stamps, tf_stamps, joint_stamps;
+  std::vector<std::string> joint_names;
+  std::size_t velocities = 0;
+  std::string diagnostic_name;
+  int diagnostic_level = -1;
+  const auto deadline = std::chrono::steady_clock::now() + Seconds(20);
+  while (std::chrono::steady_clock::now() < deadline &&
+         (odom_stamps.size() < 50 || tf_stamps.size() < 50 || joint_stamps.size() < 50 ||
+          diagnostic_name.empty())) {
+    take_all<nav_msgs_msg_dds__Odometry_>(
+        odom, [&](const auto& m) { odom_stamps.insert(stamp_ns(m.header.stamp)); });
+    take_all<tf2_msgs_msg_dds__TFMessage_>(tf, [&](const auto& m) {
+      if (m.transforms._length == 1 &&
+          std::string(m.transforms._buffer[0].child_frame_id) == "it_ros2/base_link") {
+        tf_stamps.insert(stamp_ns(m.transforms._buffer[0].header.stamp));
+      }
+    });
+    take_all<sensor_msgs_msg_dds__JointState_>(joints, [&](const auto& m) {
+      joint_stamps.insert(stamp_ns(m.header.stamp));
+      joint_names.clear();
+      for (std::uint32_t i = 0; i < m.name._length; ++i)
+        joint_names.emplace_back(m.name._buffer[i]);
+      velocities = m.velocity._length;
+    });
+    take_all<diagnostic_msgs_msg_dds__DiagnosticArray_>(diagnostics, [&](const auto& m) {
+      for (std::uint32_t i = 0; i < m.status._length; ++i) {
+        if (std::string(m.status._buffer[i].hardware_id) != "docent") continue;
+        diagnostic_name = m.status._buffer[i].name;
+        diagnostic_level = m.status._buffer[i].level;
+      }
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_GE(odom_stamps.size(), 50U) << daemon.err();
+  ASSERT_GE(tf_stamps.size(), 50U) << daemon.err();
+  ASSERT_GE(joint_stamps.size(), 50U) << daemon.err();
+  EXPECT_EQ(joint_names, (std::vector<std::string>{"left_wheel_joint", "right_wheel_joint"}));
+  EXPECT_EQ(velocities, 2U);
+  EXPECT_EQ(diagnostic_name, "swiveld: docent");
+  EXPECT_EQ(diagnostic_level, 0);
+  // The transform and the joint states of a cycle carry its odometry's stamp: most stamps
+  // are common to all three (a reader may miss a sample at the edges of the window).
+  std::size_t common = 0;
+  for (const std::int64_t s : tf_stamps) {
+    if (odom_stamps.count(s) != 0 && joint_stamps.count(s) != 0) ++common;
+  }
+  EXPECT_GE(common, tf_stamps.size() - 10);
+  // ROS time: within a second of this host's realtime clock.
+  timespec real{};
+  clock_gettime(CLOCK_REALTIME, &real);
+  const double now_s = static_cast<double>(real.tv_sec) + 1e-9 * static_cast<double>(real.tv_nsec);
+  EXPECT_NEAR(1e-9 * static_cast<double>(*odom_stamps.rbegin()), now_s, 1.0);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace swivel::test
