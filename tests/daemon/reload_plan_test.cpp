@@ -84,6 +84,7 @@ TEST(ReloadPlan, EachRestartSettingIsNamed) {
       {{"duration_s: 3.333}", "duration_s: 3.0}"}, "command"},
       {{"linear_deceleration_mps2: 1.0", "linear_deceleration_mps2: 2.0"}, "controlled_stop"},
       {{"angular_deceleration_radps2: 2.0", "angular_deceleration_radps2: 3.0"}, "controlled_stop"},
+      {{"twist_window_s: 0.02", "twist_window_s: 0.05"}, "odometry"},
       {{"domain_id: 0 ", "domain_id: 7 "}, "dds"},
       {{"enabled: false", "enabled: true"}, "dds"},
       {{"robot_model:", "plugin_path: [/nonexistent]\nrobot_model:"}, "plugin_path"},
