@@ -7,9 +7,15 @@
 
 // Sanitizers interpose malloc themselves; replacing it here too would hand their
 // allocations to glibc. There only operator new/delete are counted.
+// (g++ defines __SANITIZE_*__; clang answers __has_feature.)
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define SWIVEL_ALLOC_GUARD_MALLOC 0
-#else
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define SWIVEL_ALLOC_GUARD_MALLOC 0
+#endif
+#endif
+#ifndef SWIVEL_ALLOC_GUARD_MALLOC
 #define SWIVEL_ALLOC_GUARD_MALLOC 1
 #endif
 
