@@ -78,10 +78,13 @@ Answer exchange(Client& client, const std::string& robot, const dds_topic_descri
 Answer send_request(Client& client, const std::string& robot, const std::string& verb,
                     const std::string& argument, std::chrono::duration<double> timeout) {
   swivel_msg_Request request{};
-  std::string id = robot, v = verb, a = argument;
+  // The C struct takes char*: mutable copies that outlive the exchange.
+  std::string id = robot;
+  std::string verb_text = verb;
+  std::string argument_text = argument;
   request.robot_id = id.data();
-  request.verb = v.data();
-  request.argument = a.data();
+  request.verb = verb_text.data();
+  request.argument = argument_text.data();
   request.request_id = fresh_request_id();
   return exchange(client, robot, &swivel_msg_Request_desc, dds::kRequestTopic, request,
                   request.request_id, timeout);

@@ -39,30 +39,30 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
                        const DaemonConfig& fresh, std::string_view fresh_model_text) {
   ReloadPlan plan;
   auto& restart = plan.restart;
-  if (fresh.rate_hz != running.rate_hz) restart.push_back("loop.rate_hz");
-  if (fresh.fifo_priority != running.fifo_priority) restart.push_back("loop.fifo_priority");
-  if (fresh.realtime != running.realtime) restart.push_back("loop.realtime");
+  if (fresh.rate_hz != running.rate_hz) restart.emplace_back("loop.rate_hz");
+  if (fresh.fifo_priority != running.fifo_priority) restart.emplace_back("loop.fifo_priority");
+  if (fresh.realtime != running.realtime) restart.emplace_back("loop.realtime");
   if (fresh.robot_model_path != running.robot_model_path ||
       fresh_model_text != running_model_text) {
-    restart.push_back("robot_model");
+    restart.emplace_back("robot_model");
   }
-  if (!same_slot(fresh.hardware, running.hardware)) restart.push_back("hardware");
-  if (!same_slot(fresh.drivetrain, running.drivetrain)) restart.push_back("drivetrain");
+  if (!same_slot(fresh.hardware, running.hardware)) restart.emplace_back("hardware");
+  if (!same_slot(fresh.drivetrain, running.drivetrain)) restart.emplace_back("drivetrain");
   if (fresh.command.timeout_s != running.command.timeout_s ||
       fresh.command.source != running.command.source ||
       !same_script(fresh.command.script, running.command.script)) {
-    restart.push_back("command");
+    restart.emplace_back("command");
   }
-  if (fresh.plugin_path != running.plugin_path) restart.push_back("plugin_path");
-  if (dump(fresh.dds) != dump(running.dds)) restart.push_back("dds");
-  if (!same_slot(fresh.calibration, running.calibration)) restart.push_back("calibration");
+  if (fresh.plugin_path != running.plugin_path) restart.emplace_back("plugin_path");
+  if (dump(fresh.dds) != dump(running.dds)) restart.emplace_back("dds");
+  if (!same_slot(fresh.calibration, running.calibration)) restart.emplace_back("calibration");
   if (fresh.controlled_stop.linear_deceleration_mps2 !=
           running.controlled_stop.linear_deceleration_mps2 ||
       fresh.controlled_stop.angular_deceleration_radps2 !=
           running.controlled_stop.angular_deceleration_radps2) {
-    restart.push_back("controlled_stop");
+    restart.emplace_back("controlled_stop");
   }
-  if (fresh.twist_window_s != running.twist_window_s) restart.push_back("odometry");
+  if (fresh.twist_window_s != running.twist_window_s) restart.emplace_back("odometry");
   plan.swap_localization = !same_slot(fresh.localization, running.localization);
   if (fresh.log_level != running.log_level) plan.log_level = fresh.log_level;
   if (fresh.status_period_s != running.status_period_s) {

@@ -61,6 +61,8 @@ class Participant {
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
+  Participant(Participant&&) = delete;
+  Participant& operator=(Participant&&) = delete;
 
   [[nodiscard]] dds_entity_t handle() const { return handle_; }
 
