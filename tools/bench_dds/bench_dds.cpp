@@ -2,11 +2,14 @@
 //
 // A server process runs the DdsBridge over a synthetic 1 kHz loop (each snapshot stamped
 // with CLOCK_MONOTONIC at its cycle) and echoes pings; this process measures
-//   age   = client receive time - snapshot stamp
+//   age   = client receive time - snapshot stamp, for Swivel's RobotState (monotonic stamp)
+//           and for ROS 2's rt/<robot>/odom and rt/tf (header stamps in ROS time, against
+//           the client's CLOCK_REALTIME)
 //   floor = one-way DDS latency, half the round trip of a ping-pong with the same QoS, one
 //           ping per publish period (the cadence of the state)
-// and prints p50/p99 of both, with the target: age p99 <= floor p99 + 150 us (the bridge
-// publishes each sample right after the loop cycle that made it: one DDS hop).
+// and prints p50/p99 of each, with the target: age p99 <= floor p99 + 150 us (the bridge
+// publishes each sample right after the loop cycle that made it: one DDS hop). The exit
+// status follows the RobotState target; odom and tf are reported against the same bound.
 
 #include <CLI/CLI.hpp>
 #include <signal.h>
@@ -17,11 +20,13 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/cli/command_line.hpp"
 #include "swivel/clock.hpp"
@@ -35,6 +40,16 @@ constexpr const char* kPingTopic = "swivel_bench_ping";
 constexpr const char* kPongTopic = "swivel_bench_pong";
 
 std::atomic<bool> g_stop{false};
+
+std::int64_t realtime_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+double ros_stamp_s(const builtin_interfaces_msg_dds__Time_& t) {
+  return static_cast<double>(t.sec) + 1e-9 * static_cast<double>(t.nanosec);
+}
 extern "C" void on_signal(int) { g_stop = true; }
 
 double percentile(std::vector<double> v, double p) {
@@ -44,9 +59,11 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(i, v.size() - 1)];
 }
 
-dds_entity_t make_reader(dds_entity_t pp, const dds_topic_descriptor_t* d, const char* name) {
+dds_entity_t make_reader(dds_entity_t pp, const dds_topic_descriptor_t* d,
+                         const std::string& name) {
   const QosPtr qos = default_qos(10);
-  return check(dds_create_reader(pp, create_topic(pp, d, name), qos.get(), nullptr), "reader");
+  return check(dds_create_reader(pp, create_topic(pp, d, name.c_str()), qos.get(), nullptr),
+               "reader");
 }
 
 dds_entity_t make_writer(dds_entity_t pp, const dds_topic_descriptor_t* d, const char* name) {
@@ -74,11 +91,17 @@ int run_server(const std::string& robot, double rate_hz) {
       const std::scoped_lock lock(mutex);
       latest.cycle = ++cycle;
       latest.stamp_s = swivel::monotonic_s();
+      latest.ros_stamp_ns = realtime_ns();  // the daemon maps stamp_s through its clock offset
     }
   });
   DdsOptions options;
   options.publish_rate_hz = rate_hz;
   options.config_uri = tool_config_uri();  // loopback unless CYCLONEDDS_URI says otherwise
+  // ROS 2 odometry and tf as the daemon publishes them, under the robot's namespace.
+  options.ros2.enabled = true;
+  options.ros2.ros_namespace = robot;
+  options.ros2.odom_frame_id = robot + "/odom";
+  options.ros2.base_frame_id = robot + "/base_link";
   DdsBridge bridge(options, robot, {.read_state = [&](StateSnapshot& s) {
                      const std::scoped_lock lock(mutex);
                      s = latest;
@@ -116,6 +139,11 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   }
   Participant pp({0, tool_config_uri()});
   const dds_entity_t state = make_reader(pp.handle(), &swivel_msg_RobotState_desc, kRobotStateTopic);
+  Ros2Options ros2;
+  ros2.ros_namespace = robot;
+  const dds_entity_t odom =
+      make_reader(pp.handle(), &nav_msgs_msg_dds__Odometry__desc, ros2.odom_topic());
+  const dds_entity_t tf = make_reader(pp.handle(), &tf2_msgs_msg_dds__TFMessage__desc, ros2.tf_topic());
   const dds_entity_t ping = make_writer(pp.handle(), &swivel_msg_VelocityCommand_desc, kPingTopic);
   const dds_entity_t pong = make_reader(pp.handle(), &swivel_msg_VelocityCommand_desc, kPongTopic);
   auto finish = [&](int code) {
@@ -126,8 +154,13 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
 
   // Age of the state at this client.
   std::vector<double> ages_us;
+  std::vector<double> odom_ages_us;
+  std::vector<double> tf_ages_us;
   const dds_entity_t ws = dds_create_waitset(pp.handle());
   dds_waitset_attach(ws, dds_create_readcondition(state, DDS_ANY_STATE), 0);
+  dds_waitset_attach(ws, dds_create_readcondition(odom, DDS_ANY_STATE), 1);
+  dds_waitset_attach(ws, dds_create_readcondition(tf, DDS_ANY_STATE), 2);
+  const std::string odom_frame = robot + "/odom";
   const double deadline_first = swivel::monotonic_s() + 10.0;
   double end = 0.0;
   while (end == 0.0 || swivel::monotonic_s() < end) {
@@ -150,6 +183,23 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
       ages_us.push_back(1e6 * (now - s->stamp_s));
     }
     if (n > 0) dds_return_loan(state, samples, n);
+    if (end == 0.0) continue;
+    // ROS 2 stamps are ROS time: compare with this host's realtime clock.
+    const dds_return_t n_odom = dds_take(odom, samples, infos, 16, 16);
+    const double ros_now = 1e-9 * static_cast<double>(realtime_ns());
+    for (dds_return_t i = 0; i < n_odom; ++i) {
+      const auto* o = static_cast<const nav_msgs_msg_dds__Odometry_*>(samples[i]);
+      if (infos[i].valid_data) odom_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(o->header.stamp)));
+    }
+    if (n_odom > 0) dds_return_loan(odom, samples, n_odom);
+    const dds_return_t n_tf = dds_take(tf, samples, infos, 16, 16);
+    for (dds_return_t i = 0; i < n_tf; ++i) {
+      const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(samples[i]);
+      if (!infos[i].valid_data || m->transforms._length == 0) continue;
+      const auto& t = m->transforms._buffer[0];
+      if (odom_frame == t.header.frame_id) tf_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(t.header.stamp)));
+    }
+    if (n_tf > 0) dds_return_loan(tf, samples, n_tf);
   }
 
   // Floor: ping-pong with the same QoS between the same two processes.
@@ -218,6 +268,21 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   std::printf("target: age p99 <= floor p99 + %.0f us = %.1f us: %s (age p99 - floor p99 = %.1f us)\n",
               kAllowanceUs, target_us, age_p99 <= target_us ? "met" : "NOT met",
               age_p99 - floor_p99);
+  // ROS 2 ages rest on two clocks (the server's realtime stamp, the client's realtime
+  // receive time) of the same host, so they compare directly with the floor too.
+  const auto report_ros = [&](const char* name, const std::vector<double>& ages) {
+    if (ages.empty()) {
+      std::printf("%-8s age at client: no samples (ROS 2 topics not published?)\n", name);
+      return;
+    }
+    const double p99 = percentile(ages, 0.99);
+    std::printf("%-8s age at client (%zu samples): p50 %.1f us  p99 %.1f us  max %.1f us; "
+                "p99 - floor p99 = %.1f us: %s\n",
+                name, ages.size(), percentile(ages, 0.50), p99, percentile(ages, 1.0),
+                p99 - floor_p99, p99 <= target_us ? "within the target" : "beyond the target");
+  };
+  report_ros("rt/odom", odom_ages_us);
+  report_ros("rt/tf", tf_ages_us);
   return finish(age_p99 <= target_us ? 0 : 3);
 }
 
