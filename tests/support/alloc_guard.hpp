@@ -35,6 +35,8 @@ class AllocCounter {
   ~AllocCounter();
   AllocCounter(const AllocCounter&) = delete;
   AllocCounter& operator=(const AllocCounter&) = delete;
+  AllocCounter(AllocCounter&&) = delete;
+  AllocCounter& operator=(AllocCounter&&) = delete;
 
   /// Heap operations on the armed thread since construction. Call it on the armed thread
   /// (first_allocation_bytes is that thread's).

@@ -18,6 +18,7 @@
 #include "swivel/rt/control_loop.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/timing_stats.hpp"
+#include "swivel/stats/summary.hpp"
 
 namespace swivel::bench {
 namespace {
@@ -44,10 +45,9 @@ dxl::Emulator::Options emulator_options(const Case& c, const HardwareSettings& s
   return o;
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+// 0 for an empty sample (a phase that produced none), else the type-7 quantile.
+double percentile(const std::vector<double>& v, double q) {
+  return v.empty() ? 0.0 : stats::quantile(v, q);
 }
 
 // The plugin's cycle, back to back: Sync Write of the goals (the wheel servos' velocities and,

@@ -10,15 +10,14 @@
 
 #include "bench_plugins.hpp"
 #include "swivel/rt/control_loop.hpp"
+#include "swivel/stats/summary.hpp"
 
 namespace swivel::bench {
 namespace {
 
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const auto index = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
-  return values[std::min(index, values.size() - 1)];
+// 0 for an empty sample (a phase that produced none), else the type-7 quantile.
+double percentile(const std::vector<double>& values, double q) {
+  return values.empty() ? 0.0 : stats::quantile(values, q);
 }
 
 void print_row(const char* label, const std::vector<double>& v) {

@@ -12,12 +12,12 @@
 // status follows the RobotState target; odom and tf are reported against the same bound.
 
 #include <CLI/CLI.hpp>
-#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <csignal>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -29,6 +29,7 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/cli/command_line.hpp"
+#include "swivel/stats/summary.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
@@ -52,11 +53,9 @@ double ros_stamp_s(const builtin_interfaces_msg_dds__Time_& t) {
 }
 extern "C" void on_signal(int) { g_stop = true; }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
+// 0 for an empty sample (a phase that produced none), else the type-7 quantile.
+double percentile(const std::vector<double>& v, double p) {
+  return v.empty() ? 0.0 : stats::quantile(v, p);
 }
 
 dds_entity_t make_reader(dds_entity_t pp, const dds_topic_descriptor_t* d,
@@ -252,8 +251,10 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
     return finish(1);
   }
 
-  const double age_p50 = percentile(ages_us, 0.50), age_p99 = percentile(ages_us, 0.99);
-  const double floor_p50 = percentile(one_way_us, 0.50), floor_p99 = percentile(one_way_us, 0.99);
+  const double age_p50 = percentile(ages_us, 0.50);
+  const double age_p99 = percentile(ages_us, 0.99);
+  const double floor_p50 = percentile(one_way_us, 0.50);
+  const double floor_p99 = percentile(one_way_us, 0.99);
   // One DDS hop after the loop: the floor plus what the publisher may add (the loop
   // cycle's own work and the publisher's wake-up).
   const double target_us = floor_p99 + kAllowanceUs;
@@ -289,7 +290,9 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
 }  // namespace
 }  // namespace swivel::dds
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{
       "swivel-bench-dds: age of the robot state at a client process, next to the DDS\n"
       "ping-pong floor of the same run. DDS configuration: CYCLONEDDS_URI when set,\n"
@@ -297,7 +300,8 @@ int main(int argc, char** argv) {
       swivel::dds::describe_tool_config()};
   bool server = false;
   std::string robot = "bench_" + std::to_string(getpid());
-  double rate_hz = 100.0, seconds = 5.0;
+  double rate_hz = 100.0;
+  double seconds = 5.0;
   int pings = 500;
   app.add_flag("--server", server, "run the publishing side (started by the benchmark)");
   app.add_option("--robot", robot, "robot id of the synthetic daemon");
@@ -305,11 +309,20 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "state measurement window, s")->capture_default_str();
   app.add_option("--pings", pings, "ping-pong round trips")->capture_default_str();
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench-dds")) return *exit;
+  return server ? swivel::dds::run_server(robot, rate_hz)
+                : swivel::dds::run_client(robot, rate_hz, seconds, pings);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
   try {
-    return server ? swivel::dds::run_server(robot, rate_hz)
-                  : swivel::dds::run_client(robot, rate_hz, seconds, pings);
+    return run(argc, argv);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "swivel-bench-dds: %s\n", e.what());
+    return 1;
+  } catch (...) {
+    std::fprintf(stderr, "swivel-bench-dds: unknown error\n");
     return 1;
   }
 }

@@ -135,6 +135,8 @@ class DdsBridge {
   ~DdsBridge();
   DdsBridge(const DdsBridge&) = delete;
   DdsBridge& operator=(const DdsBridge&) = delete;
+  DdsBridge(DdsBridge&&) = delete;
+  DdsBridge& operator=(DdsBridge&&) = delete;
 
   /// Starts the publisher and subscriber threads. Call once.
   void start();
