@@ -350,13 +350,22 @@ TEST(ControlLoop, HandsOutEveryNthCycleAsARunSample) {
   std::vector<RunSample> samples;
   RunSample r;
   while (rig.loop->take_run_sample(r)) samples.push_back(r);
-  ASSERT_EQ(samples.size(), 20U);
+  ASSERT_EQ(samples.size(), 20U);  // cycles 1, 11, ..., 191
   for (std::size_t k = 0; k < samples.size(); ++k) {
     EXPECT_EQ(samples[k].sequence, k + 1);
-    EXPECT_EQ(samples[k].cycle, 10 * (k + 1));
+    EXPECT_EQ(samples[k].cycle, 10 * k + 1);  // from the first cycle on, every 10 ms
   }
+  rig.step();  // cycle 201: due
+  ASSERT_TRUE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(r.cycle, 201U);
+  rig.step(9);  // not due again before cycle 211
+  EXPECT_FALSE(rig.loop->take_run_sample(r));
+  rig.step();
+  ASSERT_TRUE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(r.cycle, 211U);
+  samples.push_back(r);
   const RunSample& last = samples.back();
-  const StateSnapshot s = rig.state();  // the 200th cycle, the last sample's
+  const StateSnapshot s = rig.state();  // the last sample's cycle
   EXPECT_EQ(last.stamp_s, s.stamp_s);
   EXPECT_EQ(last.command_twist.vx_mps, 0.5);
   EXPECT_EQ(last.module_count, 2U);
@@ -369,6 +378,28 @@ TEST(ControlLoop, HandsOutEveryNthCycleAsARunSample) {
   EXPECT_EQ(last.fault, FaultCode::kNone);
   EXPECT_EQ(last.mode, LoopMode::kVelocity);
   EXPECT_EQ(rig.loop->run_samples_dropped(), 0U);
+}
+
+TEST(ControlLoop, RunSamplesKeepTheirRateWhenCyclesAreLateOrSkipped) {
+  LoopOptions o = test_options();
+  o.run_sample_rate_hz = 100.0;
+  LoopRig rig(o);
+  // Wake-up jitter of a third of a period either way, and a skipped deadline now and then
+  // (the loop skips the cycles it missed): still one sample per 10 ms.
+  const double t0 = rig.t_s;
+  std::vector<double> stamps;
+  RunSample r;
+  for (int k = 1; k <= 2000; ++k) {
+    if (k % 97 == 0) continue;  // a skipped deadline
+    const double jitter_s = (k % 3 == 0 ? 0.3 : (k % 3 == 1 ? -0.3 : 0.0)) * kDtS;
+    rig.loop->run_cycle(t0 + k * kDtS + jitter_s);
+    while (rig.loop->take_run_sample(r)) stamps.push_back(r.stamp_s);
+  }
+  ASSERT_EQ(stamps.size(), 200U);
+  for (std::size_t k = 1; k < stamps.size(); ++k) {
+    // At most a skipped cycle plus the jitter of two wake-ups apart from 10 ms.
+    EXPECT_NEAR(stamps[k] - stamps[k - 1], 0.01, 0.0017) << "at sample " << k;
+  }
 }
 
 TEST(ControlLoop, AFullRunSampleRingDropsAndCountsInsteadOfBlocking) {

@@ -173,10 +173,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
                                 "the loop rate " + std::to_string(options.rate_hz) +
                                 " Hz, got " + std::to_string(options.run_sample_rate_hz));
   }
-  if (options.run_sample_rate_hz > 0.0) {
-    run_sample_every_ = static_cast<std::uint32_t>(
-        std::max(1L, std::lround(options.rate_hz / options.run_sample_rate_hz)));
-  }
+  if (options.run_sample_rate_hz > 0.0) run_sample_period_s_ = 1.0 / options.run_sample_rate_hz;
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
   state_.estimate = localization.estimate();
@@ -825,6 +822,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   const bool moving = !calibrating && !final_stop && !stopping_ &&
                       latched_fault_ == FaultCode::kNone && has_command_;
   if (moving) target = command_.twist;
+  run_sample_command_ = target;
   Twist2 applied;
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
   bool zeroed = basis == nullptr && !calibrating;
@@ -925,7 +923,15 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   state_.steer_angle_rad = current_.steer_angle_rad;
   state_.stopping = stopping_;
   snapshot_.write(state_);
-  if (run_sample_every_ != 0 && state_.cycle % run_sample_every_ == 0) push_run_sample();
+  // Half a loop period early counts as on time, so that wake-up jitter does not move a
+  // sample to the next cycle; after a stall the schedule restarts rather than bursting.
+  if (run_sample_period_s_ > 0.0 &&
+      (run_sample_sequence_ == 0 || now_s >= next_run_sample_s_ - 0.5 * period_s_)) {
+    push_run_sample();
+    next_run_sample_s_ =
+        run_sample_sequence_ == 1 ? now_s + run_sample_period_s_ : next_run_sample_s_ + run_sample_period_s_;
+    if (next_run_sample_s_ <= now_s) next_run_sample_s_ = now_s + run_sample_period_s_;
+  }
   last_cycle_s_ = now_s;
   has_last_cycle_ = true;
 }
@@ -938,7 +944,7 @@ void ControlLoop::push_run_sample() noexcept {
   r.sequence = ++run_sample_sequence_;
   r.cycle = state_.cycle;
   r.stamp_s = state_.stamp_s;
-  r.command_twist = state_.command_twist;
+  r.command_twist = run_sample_command_;
   r.module_count = module_count_;
   r.wheel_angle_rad = state_.wheel_angle_rad;
   r.steer_angle_rad = state_.steer_angle_rad;

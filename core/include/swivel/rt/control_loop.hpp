@@ -106,9 +106,11 @@ struct LoopOptions {
   /// How often a non-real-time thread re-measures the offset of the realtime clock (ROS
   /// time) from the loop's monotonic clock, s (see ClockOffset).
   double clock_offset_refresh_s = 1.0;
-  /// Run samples per second handed to a recorder through take_run_sample(); 0: none. The
-  /// loop samples every round(rate_hz / run_sample_rate_hz) cycles, so the rate it keeps is
-  /// rate_hz divided by that (run_sample_period_s()). At most rate_hz.
+  /// Run samples per second handed to a recorder through take_run_sample(); 0: none; at
+  /// most rate_hz. They follow the clock, not a cycle count: a sample is due every
+  /// 1 / run_sample_rate_hz from the first cycle and taken at the first cycle within half a
+  /// loop period of that, so late or skipped cycles do not slow the rate down. A rate that
+  /// divides rate_hz gives evenly spaced samples.
   double run_sample_rate_hz = 0.0;
 };
 
@@ -202,9 +204,7 @@ class ControlLoop {
 
   /// Any thread. The time between two run samples the loop produces, s; 0 when it produces
   /// none.
-  [[nodiscard]] double run_sample_period_s() const noexcept {
-    return static_cast<double>(run_sample_every_) * period_s_;
-  }
+  [[nodiscard]] double run_sample_period_s() const noexcept { return run_sample_period_s_; }
 
   static constexpr std::size_t kRunSampleRingCapacity = 512;
 
@@ -428,9 +428,11 @@ class ControlLoop {
   bool stopping_ = false;         // the controlled stop was taken
   double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
-  std::uint32_t run_sample_every_ = 0;     // cycles between run samples; 0: none
+  double run_sample_period_s_ = 0.0;        // 0: no run samples
+  double next_run_sample_s_ = 0.0;         // when the next one is due
   std::uint64_t run_sample_sequence_ = 0;  // run samples produced
   MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
+  Twist2 run_sample_command_{};             // this cycle's target before the limits
 
   // Non-real-time ownership.
   ClockOffset clock_offset_;

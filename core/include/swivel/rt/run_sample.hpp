@@ -20,7 +20,10 @@ struct RunSample {
   std::uint64_t sequence = 0;
   std::uint64_t cycle = 0;  ///< the loop cycle sampled
   double stamp_s = 0.0;     ///< monotonic time of the cycle's reading, s
-  Twist2 command_twist;     ///< twist applied in that cycle after limits, robot frame
+  /// The velocity command the loop followed in that cycle, before the robot model's limits
+  /// (zero when it was stopping the robot or had no command), robot frame: what a run log's
+  /// command columns hold, since the model-gap replay applies the model's limits itself.
+  Twist2 command_twist;
   std::uint32_t module_count = 0;
   std::array<double, kMaxModules> wheel_angle_rad{};  ///< cumulative encoder angles, rad
   std::array<double, kMaxModules> steer_angle_rad{};  ///< measured steering angles, rad (swpc)
