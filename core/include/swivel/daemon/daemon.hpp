@@ -55,6 +55,9 @@
 namespace swivel::rt {
 class ControlLoop;
 }
+namespace swivel::dds {
+class RunSamplePublisher;
+}
 
 namespace swivel::daemon {
 
@@ -169,6 +172,7 @@ class Daemon {
   std::unique_ptr<LoopRequests> loop_requests_;
   std::unique_ptr<DiagnosticsSource> diagnostics_;  // publisher thread
   std::unique_ptr<dds::DdsBridge> bridge_;
+  std::unique_ptr<dds::RunSamplePublisher> run_samples_;  // on the bridge's participant
   std::unique_ptr<CalibrationService> calibration_;
   std::unique_ptr<ConfigWatcher> watcher_;
   std::unique_ptr<ScriptCommandSource> script_;
