@@ -7,8 +7,9 @@
 // Threads: the main thread (run_until_signal) owns reloads, hot swaps, requests, the
 // watchdog and the calibration's periodic work; the loop thread runs the plugins; the
 // bridge has a publisher and a subscriber thread (which queues requests for the main
-// thread); the script command source, the recorder and the file watcher have one thread
-// each. Nothing added here runs on the loop thread.
+// thread); the run-sample publisher (swivel_run_samples, fed by the loop's run-sample
+// ring), the script command source, the recorder and the file watcher have one thread each.
+// Nothing added here runs on the loop thread.
 //
 // Requests (DDS Request and SetPose, ROS 2 initialpose) are answered one at a time by the
 // main thread, each with a Reply carrying its request id:
