@@ -4,12 +4,12 @@
 // loopback DDS, domains 66 and 67.
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -57,9 +57,9 @@ std::string write_setup(const std::string& dir, const std::string& robot, int do
 }
 
 std::vector<std::string> ctl(std::vector<std::string> args, int domain, const std::string& robot) {
-  for (const std::string& a : {std::string("--domain"), std::to_string(domain),
-                               std::string("--robot"), robot, std::string("--timeout"),
-                               std::string("10")}) {
+  for (const std::string& a :
+       {std::string("--domain"), std::to_string(domain), std::string("--robot"), robot,
+        std::string("--timeout"), std::string("10")}) {
     args.push_back(a);
   }
   return args;
@@ -112,8 +112,7 @@ TEST(SwiveldRecordOverDds, RecordsEverySampleAndTheGapWorkflowFindsNothingMissin
   const RunLogSample& first = log.samples.front();
   const RunLogSample& last = log.samples.back();
   ASSERT_EQ(first.cmd.vx_mps, 0.0) << "the recording must start at rest for the replay";
-  EXPECT_EQ(record.err.find("is moving as the recording starts"), std::string::npos)
-      << record.err;
+  EXPECT_EQ(record.err.find("is moving as the recording starts"), std::string::npos) << record.err;
   EXPECT_GT(last.wheel_rad[0] - first.wheel_rad[0], 40.0);  // about 6 m on 75 mm wheels
   EXPECT_GT(last.wheel_rad[1] - first.wheel_rad[1], 40.0);
   double max_turn_radps = 0.0;
@@ -129,11 +128,10 @@ TEST(SwiveldRecordOverDds, RecordsEverySampleAndTheGapWorkflowFindsNothingMissin
 
   // The robot's own, correct model: the workflow must find no significant gap.
   const std::string report = dir + "/report";
-  Child gap(SWIVEL_LAB_EXE, {"gap", "--model", dir + "/" + robot + ".yaml", "--run", run,
-                             "--out", report});
+  Child gap(SWIVEL_LAB_EXE,
+            {"gap", "--model", dir + "/" + robot + ".yaml", "--run", run, "--out", report});
   ASSERT_EQ(gap.exit_code(Seconds(120)), 0) << gap.out() << gap.err();
-  EXPECT_NE(gap.out().find("sensor to pose: no significant gap"), std::string::npos)
-      << gap.out();
+  EXPECT_NE(gap.out().find("sensor to pose: no significant gap"), std::string::npos) << gap.out();
   EXPECT_NE(gap.out().find("command to motion: no significant gap"), std::string::npos)
       << gap.out();
   const auto verdicts = nlohmann::json::parse(read_text(report + "/report.json"))["verdicts"];

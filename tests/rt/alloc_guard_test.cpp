@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <thread>
 #include <vector>
@@ -35,8 +35,8 @@ thread_local std::vector<int>* volatile t_sink = nullptr;
 struct Outcome {
   HeapCounts counts;
   StateSnapshot last;
-  std::uint64_t run_samples = 0;      // taken by the recording thread
-  std::uint64_t run_sample_gaps = 0;  // jumps in their sequence numbers
+  std::uint64_t run_samples = 0;          // taken by the recording thread
+  std::uint64_t run_sample_gaps = 0;      // jumps in their sequence numbers
   std::uint64_t run_samples_dropped = 0;  // the loop's count of samples a full ring refused
 };
 

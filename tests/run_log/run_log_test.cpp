@@ -292,7 +292,8 @@ TEST(RunLog, BadEstimateColumnsAreReported) {
 
 TEST(RunLog, WriterRejectsImpossibleHeaders) {
   std::ostringstream out;
-  EXPECT_THROW(RunLogWriter(out, RunLogHeader{"x", DrivetrainKind::kDifferential, 3, {}, false}), RunLogError);
+  EXPECT_THROW(RunLogWriter(out, RunLogHeader{"x", DrivetrainKind::kDifferential, 3, {}, false}),
+               RunLogError);
   EXPECT_THROW(RunLogWriter(out, swpc_header(1)), RunLogError);
   EXPECT_THROW(RunLogWriter("/nonexistent-dir/run.csv", swpc_header(4)), RunLogError);
 }

@@ -42,10 +42,10 @@ dds_entity_t Client::reader(const dds_topic_descriptor_t* descriptor, const char
                             const dds_qos_t* qos) {
   const dds_entity_t t = dds::create_topic(participant_.handle(), descriptor, topic);
   const dds::QosPtr default_qos = dds::default_qos(10);
-  const dds_entity_t r = dds::check(
-      dds_create_reader(participant_.handle(), t, qos != nullptr ? qos : default_qos.get(),
-                        nullptr),
-      "dds_create_reader");
+  const dds_entity_t r =
+      dds::check(dds_create_reader(participant_.handle(), t,
+                                   qos != nullptr ? qos : default_qos.get(), nullptr),
+                 "dds_create_reader");
   conditions_[r] =
       dds::check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
   return r;

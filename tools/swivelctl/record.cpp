@@ -142,16 +142,16 @@ class Recording {
 
   [[nodiscard]] std::string progress() const {
     return robot_ + ": " + std::to_string(rows_) + " rows, " + fixed(last_t_s_, 2) + " s, " +
-           std::to_string(gaps_) + " gaps (" + std::to_string(missing_) +
-           " samples missing), " + std::to_string(skipped_) + " skipped";
+           std::to_string(gaps_) + " gaps (" + std::to_string(missing_) + " samples missing), " +
+           std::to_string(skipped_) + " skipped";
   }
 
   [[nodiscard]] std::string summary() const {
     const double rate_hz = rows_ > 1 ? static_cast<double>(rows_ - 1) / last_t_s_ : 0.0;
     return "recorded " + std::to_string(rows_) + " rows (" + fixed(last_t_s_, 2) + " s at " +
            fixed(rate_hz, 1) + " Hz) from " + robot_ + " to " + options_.out + ": " +
-           std::to_string(gaps_) + " gaps (" + std::to_string(missing_) +
-           " samples missing), " + std::to_string(skipped_) + " skipped";
+           std::to_string(gaps_) + " gaps (" + std::to_string(missing_) + " samples missing), " +
+           std::to_string(skipped_) + " skipped";
   }
 
  private:
@@ -200,7 +200,8 @@ int run_record(const RecordOptions& options) {
     if (!client.wait_for_data({reader}, Seconds(0.1))) continue;
     Client::take(reader, [&](const void* p) {
       const auto& m = *static_cast<const swivel_msg_RunSample*>(p);
-      if (outcome != Recording::Outcome::kContinue || m.robot_id == nullptr || robot != m.robot_id) {
+      if (outcome != Recording::Outcome::kContinue || m.robot_id == nullptr ||
+          robot != m.robot_id) {
         return;
       }
       last_sample = SteadyClock::now();

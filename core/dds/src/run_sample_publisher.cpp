@@ -16,8 +16,7 @@
 namespace swivel::dds {
 
 RunSamplePublisher::RunSamplePublisher(dds_entity_t participant, std::string robot_id,
-                                       DrivetrainKind drivetrain, double period_s,
-                                       TakeSample take)
+                                       DrivetrainKind drivetrain, double period_s, TakeSample take)
     : robot_id_(std::move(robot_id)),
       drivetrain_(drivetrain),
       period_s_(period_s),
@@ -27,7 +26,8 @@ RunSamplePublisher::RunSamplePublisher(dds_entity_t participant, std::string rob
   if (!std::isfinite(period_s_) || !(period_s_ > 0.0)) {
     throw std::invalid_argument("RunSamplePublisher: period_s must be finite and positive");
   }
-  const dds_entity_t topic = create_topic(participant, &swivel_msg_RunSample_desc, kRunSamplesTopic);
+  const dds_entity_t topic =
+      create_topic(participant, &swivel_msg_RunSample_desc, kRunSamplesTopic);
   const QosPtr qos = run_samples_qos();
   writer_ = check(dds_create_writer(participant, topic, qos.get(), nullptr),
                   "dds_create_writer(swivel_run_samples)");
@@ -129,9 +129,10 @@ void RunSamplePublisher::publish(const RunSample& r) {
     write_failures_.fetch_add(1, std::memory_order_relaxed);
     if (!warned_write_) {
       warned_write_ = true;
-      spdlog::warn("dds: {}: dds_write failed ({}); a recorder sees the gap, further failures "
-                   "are counted",
-                   kRunSamplesTopic, dds_strretcode(rc));
+      spdlog::warn(
+          "dds: {}: dds_write failed ({}); a recorder sees the gap, further failures "
+          "are counted",
+          kRunSamplesTopic, dds_strretcode(rc));
     }
     return;
   }

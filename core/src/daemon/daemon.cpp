@@ -4,7 +4,6 @@
 #include <time.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -195,11 +194,11 @@ void Daemon::start_bridge() {
     // The ring's only consumer: every sample the loop produced since its first cycle.
     run_samples_ = std::make_unique<dds::RunSamplePublisher>(
         bridge_->participant(), config_.robot.name, config_.robot.drivetrain,
-        loop_->run_sample_period_s(), [this](RunSample& out) { return loop_->take_run_sample(out); });
+        loop_->run_sample_period_s(),
+        [this](RunSample& out) { return loop_->take_run_sample(out); });
     run_samples_->start();
-    spdlog::info("DDS: run samples on {} at {:g} Hz (every {:g} loop cycles)",
-                 dds::kRunSamplesTopic, 1.0 / loop_->run_sample_period_s(),
-                 std::round(loop_->run_sample_period_s() / config_.period_s()));
+    spdlog::info("DDS: run samples on {} at {:g} Hz", dds::kRunSamplesTopic,
+                 1.0 / loop_->run_sample_period_s());
   }
   spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
                dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,

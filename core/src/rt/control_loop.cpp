@@ -169,9 +169,10 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   }
   if (!std::isfinite(options.run_sample_rate_hz) || options.run_sample_rate_hz < 0.0 ||
       options.run_sample_rate_hz > options.rate_hz) {
-    throw std::invalid_argument("run_sample_rate_hz must be 0 (none) or positive and at most "
-                                "the loop rate " + std::to_string(options.rate_hz) +
-                                " Hz, got " + std::to_string(options.run_sample_rate_hz));
+    throw std::invalid_argument(
+        "run_sample_rate_hz must be 0 (none) or positive and at most "
+        "the loop rate " +
+        std::to_string(options.rate_hz) + " Hz, got " + std::to_string(options.run_sample_rate_hz));
   }
   if (options.run_sample_rate_hz > 0.0) run_sample_period_s_ = 1.0 / options.run_sample_rate_hz;
   copy_text(localization_name, state_.localization_plugin);
@@ -929,7 +930,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
       (run_sample_sequence_ == 0 || now_s >= next_run_sample_s_ - 0.5 * period_s_)) {
     push_run_sample();
     next_run_sample_s_ =
-        run_sample_sequence_ == 1 ? now_s + run_sample_period_s_ : next_run_sample_s_ + run_sample_period_s_;
+        (run_sample_sequence_ == 1 ? now_s : next_run_sample_s_) + run_sample_period_s_;
     if (next_run_sample_s_ <= now_s) next_run_sample_s_ = now_s + run_sample_period_s_;
   }
   last_cycle_s_ = now_s;

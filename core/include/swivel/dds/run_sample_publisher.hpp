@@ -25,9 +25,9 @@ namespace swivel::dds {
 
 /// What the publisher did, for logs and tests.
 struct RunSampleCounters {
-  std::uint64_t published = 0;      ///< samples written
-  std::uint64_t lost_at_source = 0; ///< samples the loop could not hand over (sequence jumps)
-  std::uint64_t write_failures = 0; ///< samples DDS refused (dds_write failed)
+  std::uint64_t published = 0;       ///< samples written
+  std::uint64_t lost_at_source = 0;  ///< samples the loop could not hand over (sequence jumps)
+  std::uint64_t write_failures = 0;  ///< samples DDS refused (dds_write failed)
 };
 
 class RunSamplePublisher {
@@ -67,7 +67,7 @@ class RunSamplePublisher {
   TakeSample take_;
   dds_entity_t writer_ = 0;
   std::jthread thread_;
-  std::uint64_t last_sequence_ = 0;  // publisher thread only
+  std::uint64_t last_sequence_ = 0;   // publisher thread only
   double next_loss_warning_s_ = 0.0;  // publisher thread only
   bool warned_write_ = false;         // publisher thread only
   std::atomic<std::uint64_t> published_{0};

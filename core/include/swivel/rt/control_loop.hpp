@@ -429,8 +429,8 @@ class ControlLoop {
   double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
   double run_sample_period_s_ = 0.0;        // 0: no run samples
-  double next_run_sample_s_ = 0.0;         // when the next one is due
-  std::uint64_t run_sample_sequence_ = 0;  // run samples produced
+  double next_run_sample_s_ = 0.0;          // when the next one is due
+  std::uint64_t run_sample_sequence_ = 0;   // run samples produced
   MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
   Twist2 run_sample_command_{};             // this cycle's target before the limits
 

@@ -31,9 +31,9 @@ struct RunSample {
   /// The pose the hardware reports as the truth (a simulator's ground truth, at stamp_s), or
   /// else the newest motion-capture sample the loop took since the previous run sample.
   bool has_truth = false;
-  Pose2 truth;                 ///< world frame
-  double truth_stamp_s = 0.0;  ///< monotonic time the truth refers to, s
-  Pose2 estimate;              ///< the localization's pose estimate, world frame
+  Pose2 truth;                         ///< world frame
+  double truth_stamp_s = 0.0;          ///< monotonic time the truth refers to, s
+  Pose2 estimate;                      ///< the localization's pose estimate, world frame
   FaultCode fault = FaultCode::kNone;  ///< active fault in that cycle
   LoopMode mode = LoopMode::kIdle;
 };
