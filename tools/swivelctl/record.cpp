@@ -103,6 +103,8 @@ class Recording {
                 << ": the daemon restarted, or two daemons run as this robot; recording ends\n";
       return Outcome::kFailed;
     }
+    // Counted before the duration check: samples missing before the one that ends the
+    // recording may belong to the recorded window.
     if (m.sequence_number > last_sequence_ + 1) {
       ++gaps_;
       missing_ += m.sequence_number - last_sequence_ - 1;
