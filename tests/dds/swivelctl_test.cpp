@@ -302,7 +302,10 @@ TEST(Swivelctl, RecordWritesTheSamplesAndReportsGapsAndSkippedOnes) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto lines = r.lines();
   ASSERT_FALSE(lines.empty());
-  unsigned rows = 0, gaps = 0, missing = 0, skipped = 0;
+  unsigned rows = 0;
+  unsigned gaps = 0;
+  unsigned missing = 0;
+  unsigned skipped = 0;
   const std::string& summary = lines.back();
   const auto at = summary.find("to " + path + ": ");
   ASSERT_EQ(std::sscanf(summary.c_str(), "recorded %u rows", &rows), 1) << summary;

@@ -107,8 +107,9 @@ TEST(SwiveldRecordOverDds, RecordsEverySampleAndTheGapWorkflowFindsNothingMissin
     EXPECT_LT(dt, 0.1) << "a hole at row " << k;
     steps_s.push_back(dt);
   }
-  std::nth_element(steps_s.begin(), steps_s.begin() + steps_s.size() / 2, steps_s.end());
-  EXPECT_NEAR(steps_s[steps_s.size() / 2], 1.0 / kRecordRateHz, 2e-4);
+  const auto middle = steps_s.begin() + static_cast<std::ptrdiff_t>(steps_s.size() / 2);
+  std::nth_element(steps_s.begin(), middle, steps_s.end());
+  EXPECT_NEAR(*middle, 1.0 / kRecordRateHz, 2e-4);
   const RunLogSample& first = log.samples.front();
   const RunLogSample& last = log.samples.back();
   ASSERT_EQ(first.cmd.vx_mps, 0.0) << "the recording must start at rest for the replay";

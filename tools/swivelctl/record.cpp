@@ -1,5 +1,6 @@
 #include "record.hpp"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -29,9 +30,9 @@ struct RecordOptions {
 };
 
 std::string fixed(double value, int decimals) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", decimals, value);
-  return text;
+  std::array<char, 64> text{};
+  (void)std::snprintf(text.data(), text.size(), "%.*f", decimals, value);
+  return text.data();
 }
 
 bool finite_sample(const swivel_msg_RunSample& m) {
@@ -185,7 +186,7 @@ int run_record(const RecordOptions& options) {
   try {
     robot = resolve_robot(client, options.robot, timeout);
   } catch (...) {
-    std::remove(options.out.c_str());
+    (void)std::remove(options.out.c_str());
     throw;
   }
 
@@ -217,7 +218,7 @@ int run_record(const RecordOptions& options) {
   }
   recording.flush();
   if (!recording.started()) {
-    std::remove(options.out.c_str());  // the empty file made to check the path
+    (void)std::remove(options.out.c_str());  // the empty file made to check the path
     if (interrupted()) return 130;
     std::cerr << "swivelctl: robot '" << robot << "' publishes state but sent no "
               << dds::kRunSamplesTopic << " sample within " << seconds_text(timeout)

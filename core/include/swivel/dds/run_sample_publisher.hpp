@@ -46,6 +46,8 @@ class RunSamplePublisher {
   ~RunSamplePublisher();
   RunSamplePublisher(const RunSamplePublisher&) = delete;
   RunSamplePublisher& operator=(const RunSamplePublisher&) = delete;
+  RunSamplePublisher(RunSamplePublisher&&) = delete;  // its thread holds `this`
+  RunSamplePublisher& operator=(RunSamplePublisher&&) = delete;
 
   /// Starts the thread. Call once.
   void start();
@@ -59,7 +61,7 @@ class RunSamplePublisher {
  private:
   void run(const std::stop_token& stop);
   void drain();
-  void publish(const RunSample& sample);
+  void publish(const RunSample& r);
 
   std::string robot_id_;
   DrivetrainKind drivetrain_;
