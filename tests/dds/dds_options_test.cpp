@@ -29,12 +29,28 @@ TEST(DdsOptions, DefaultsWhenAbsent) {
   EXPECT_DOUBLE_EQ(options.publish_rate_hz, 100.0);
   EXPECT_DOUBLE_EQ(options.diagnostics_rate_hz, 2.0);
   EXPECT_EQ(options.history_depth, 1);
+  EXPECT_DOUBLE_EQ(options.run_samples_rate_hz, 100.0);
   EXPECT_FALSE(options.ros2.enabled);
   EXPECT_TRUE(options.ros2.publish_tf);
   EXPECT_FALSE(options.ros2.cmd_vel_stamped);
   EXPECT_DOUBLE_EQ(options.ros2.cmd_vel_max_age_s, 0.5);
   EXPECT_TRUE(options.ros2.wheel_joints.empty());
   EXPECT_TRUE(options.ros2.steering_joints.empty());
+}
+
+TEST(DdsOptions, RunSamplesRateIsANumberOrOff) {
+  const auto rate = [](const std::string& yaml) {
+    return parse_dds_options(YAML::Load(yaml), "swiveld.yaml", "/etc/swivel").run_samples_rate_hz;
+  };
+  EXPECT_DOUBLE_EQ(rate("{run_samples_rate_hz: 250}"), 250.0);
+  EXPECT_DOUBLE_EQ(rate("{run_samples_rate_hz: 0}"), 0.0);
+  EXPECT_DOUBLE_EQ(rate("{run_samples_rate_hz: off}"), 0.0);
+  EXPECT_NE(error_of("{run_samples_rate_hz: 1001}").find("dds.run_samples_rate_hz"),
+            std::string::npos);
+  EXPECT_NE(error_of("{run_samples_rate_hz: -1}").find("dds.run_samples_rate_hz"),
+            std::string::npos);
+  EXPECT_NE(error_of("{run_samples_rate_hz: sometimes}").find("dds.run_samples_rate_hz"),
+            std::string::npos);
 }
 
 TEST(DdsOptions, ReadsEveryKey) {

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -15,6 +16,8 @@
 #include "dds_test_util.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
+#include "swivel/dds/run_sample_publisher.hpp"
+#include "swivel/run_log.hpp"
 
 namespace swivel::dds {
 namespace {
@@ -122,6 +125,7 @@ class FakeDaemon {
     const std::scoped_lock lock(mutex_);
     return poses_;
   }
+  [[nodiscard]] dds_entity_t participant() const { return bridge_->participant(); }
 
  private:
   std::atomic<std::uint64_t> cycle_{0};
@@ -245,6 +249,100 @@ TEST(Swivelctl, SetPoseSendsThePoseAndItsSigmas) {
   EXPECT_TRUE(poses[0].pose.has_covariance);
   EXPECT_NEAR(poses[0].pose.covariance[4], 0.04, 1e-15);
   EXPECT_FALSE(poses[1].pose.has_covariance);
+}
+
+// Run samples at 100 Hz (stamps on a synthetic clock, sent as time passes): every 100th
+// sequence number has ten missing after it (the loop's ring lost them), every 100th sample
+// carries a NaN wheel angle (a sensor fault cycle), some a fault code.
+class FakeRunSamples {
+ public:
+  explicit FakeRunSamples(dds_entity_t participant, const std::string& robot)
+      : publisher_(participant, robot, DrivetrainKind::kDifferential, 0.01,
+                   [this](RunSample& r) { return next(r); }) {
+    publisher_.start();
+  }
+
+ private:
+  bool next(RunSample& r) {
+    if (swivel::monotonic_s() < start_s_ + 0.01 * static_cast<double>(produced_)) return false;
+    ++produced_;
+    if (sequence_ % 100 == 50) sequence_ += 10;  // lost before they were published
+    ++sequence_;
+    r = RunSample{};
+    r.sequence = sequence_;
+    r.stamp_s = 1000.0 + 0.01 * static_cast<double>(sequence_);
+    r.module_count = 2;
+    r.command_twist = {0.2, 0.0, 0.1};
+    r.wheel_angle_rad[0] = 0.05 * static_cast<double>(sequence_);
+    r.wheel_angle_rad[1] = 0.06 * static_cast<double>(sequence_);
+    if (sequence_ % 100 == 80) r.wheel_angle_rad[1] = std::nan("");
+    r.gyro_wz_radps = 0.1;
+    r.has_truth = sequence_ % 2 == 0;
+    r.truth = {0.001 * static_cast<double>(sequence_), 0.0, 0.0};
+    r.estimate = {0.0011 * static_cast<double>(sequence_), -0.5, 0.25};
+    r.fault = sequence_ % 100 == 90 ? FaultCode::kCommandTimeout : FaultCode::kNone;
+    return true;
+  }
+
+  double start_s_ = swivel::monotonic_s();
+  std::uint64_t produced_ = 0;
+  std::uint64_t sequence_ = 0;
+  RunSamplePublisher publisher_;
+};
+
+TEST(Swivelctl, RecordWritesTheSamplesAndReportsGapsAndSkippedOnes) {
+  const std::string robot = unique_robot_id("record");
+  FakeDaemon daemon(robot);
+  FakeRunSamples samples(daemon.participant(), robot);
+  const std::string path = ::testing::TempDir() + "swivelctl_record_" + robot + ".csv";
+
+  const RunResult r =
+      swivelctl("record --out " + path + " --duration 2.5 --timeout 10 --robot " + robot);
+
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto lines = r.lines();
+  ASSERT_FALSE(lines.empty());
+  unsigned rows = 0;
+  unsigned gaps = 0;
+  unsigned missing = 0;
+  unsigned skipped = 0;
+  const std::string& summary = lines.back();
+  const auto at = summary.find("to " + path + ": ");
+  ASSERT_EQ(std::sscanf(summary.c_str(), "recorded %u rows", &rows), 1) << summary;
+  ASSERT_NE(at, std::string::npos) << summary;
+  ASSERT_EQ(std::sscanf(summary.c_str() + at + path.size() + 5,
+                        "%u gaps (%u samples missing), %u skipped", &gaps, &missing, &skipped),
+            3)
+      << summary;
+  // 2.5 s of stamps: 250 sequence numbers, each a row, a missing sample or a skipped one,
+  // and up to 10 more when the sample that ends the recording comes right after a gap (its
+  // missing predecessors are counted: some of them may belong to the window).
+  EXPECT_GE(gaps, 2u) << summary;
+  EXPECT_EQ(missing, 10 * gaps) << summary;
+  EXPECT_GE(skipped, 2u) << summary;
+  EXPECT_GE(rows + missing + skipped, 249u) << summary;
+  EXPECT_LE(rows + missing + skipped, 261u) << summary;
+
+  const RunLog log = read_run_log(path);
+  EXPECT_EQ(log.header.robot, robot);
+  EXPECT_TRUE(log.header.estimate_columns);
+  ASSERT_EQ(log.samples.size(), rows);
+  bool saw_fault = false;
+  for (std::size_t k = 0; k < log.samples.size(); ++k) {
+    const RunLogSample& s = log.samples[k];
+    if (k > 0) {
+      EXPECT_GT(s.t_s, log.samples[k - 1].t_s);
+    }
+    EXPECT_TRUE(std::isfinite(s.wheel_rad[1]));
+    EXPECT_EQ(s.cmd.wz_radps, 0.1);
+    EXPECT_EQ(s.estimate.y_m, -0.5);
+    EXPECT_EQ(s.estimate.yaw_rad, 0.25);
+    saw_fault = saw_fault || s.fault_code == static_cast<std::uint16_t>(FaultCode::kCommandTimeout);
+    // The stamps are 10 ms apart: wheel_l advances 0.05 rad per sample.
+    EXPECT_NEAR(s.wheel_rad[0] - log.samples[0].wheel_rad[0], 5.0 * s.t_s, 1e-9);
+  }
+  EXPECT_TRUE(saw_fault);
+  std::remove(path.c_str());
 }
 
 TEST(Swivelctl, ExitsNonZeroWhenNothingAnswers) {

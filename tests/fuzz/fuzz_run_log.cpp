@@ -15,7 +15,11 @@ namespace {
 constexpr const char* kTarget = "fuzz_run_log";
 
 bool same(const swivel::RunLogSample& a, const swivel::RunLogSample& b, std::size_t modules,
-          bool swpc) {
+          bool swpc, bool estimate) {
+  if (estimate && (a.estimate.x_m != b.estimate.x_m || a.estimate.y_m != b.estimate.y_m ||
+                   a.estimate.yaw_rad != b.estimate.yaw_rad || a.fault_code != b.fault_code)) {
+    return false;
+  }
   if (a.t_s != b.t_s || a.cmd.vx_mps != b.cmd.vx_mps || a.cmd.vy_mps != b.cmd.vy_mps ||
       a.cmd.wz_radps != b.cmd.wz_radps || a.gyro_wz_radps != b.gyro_wz_radps ||
       a.has_truth != b.has_truth) {
@@ -59,9 +63,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool swpc = h.drivetrain == swivel::DrivetrainKind::kSwpc;
   bool ok = again.header.robot == h.robot && again.header.drivetrain == h.drivetrain &&
             again.header.module_count == h.module_count &&
+            again.header.estimate_columns == h.estimate_columns &&
             again.samples.size() == log.samples.size();
   for (std::size_t i = 0; ok && i < log.samples.size(); ++i) {
-    ok = same(log.samples[i], again.samples[i], h.module_count, swpc);
+    ok = same(log.samples[i], again.samples[i], h.module_count, swpc, h.estimate_columns);
   }
   if (!ok) {
     swivel::fuzz::contract_broken(kTarget,

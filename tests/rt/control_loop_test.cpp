@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "fake_plugins.hpp"
 
@@ -338,6 +339,99 @@ TEST(ControlLoop, HandsMotionCaptureToLocalization) {
   rig.step();
   EXPECT_DOUBLE_EQ(rig.localization.last_motion_capture_x_m.load(), 1.25);
   EXPECT_EQ(rig.state().fault, FaultCode::kNone);
+}
+
+TEST(ControlLoop, HandsOutEveryNthCycleAsARunSample) {
+  LoopOptions o = test_options();
+  o.run_sample_rate_hz = 100.0;  // every 10th cycle at 1 kHz
+  LoopRig rig(o);
+  EXPECT_DOUBLE_EQ(rig.loop->run_sample_period_s(), 0.01);
+  rig.drive(0.5, 0.0, 200);
+  std::vector<RunSample> samples;
+  RunSample r;
+  while (rig.loop->take_run_sample(r)) samples.push_back(r);
+  ASSERT_EQ(samples.size(), 20U);  // cycles 1, 11, ..., 191
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    EXPECT_EQ(samples[k].sequence, k + 1);
+    EXPECT_EQ(samples[k].cycle, 10 * k + 1);  // from the first cycle on, every 10 ms
+  }
+  rig.step();  // cycle 201: due
+  ASSERT_TRUE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(r.cycle, 201U);
+  rig.step(9);  // not due again before cycle 211
+  EXPECT_FALSE(rig.loop->take_run_sample(r));
+  rig.step();
+  ASSERT_TRUE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(r.cycle, 211U);
+  samples.push_back(r);
+  const RunSample& last = samples.back();
+  const StateSnapshot s = rig.state();  // the last sample's cycle
+  EXPECT_EQ(last.stamp_s, s.stamp_s);
+  EXPECT_EQ(last.command_twist.vx_mps, 0.5);
+  EXPECT_EQ(last.module_count, 2U);
+  EXPECT_EQ(last.wheel_angle_rad[0], s.wheel_angle_rad[0]);
+  EXPECT_GT(last.wheel_angle_rad[0], samples.front().wheel_angle_rad[0]);
+  EXPECT_EQ(last.estimate.x_m, s.estimate.pose.x_m);
+  ASSERT_TRUE(last.has_truth);  // the fake hardware reports its true pose
+  EXPECT_EQ(last.truth.x_m, s.truth.x_m);
+  EXPECT_EQ(last.truth_stamp_s, s.stamp_s);
+  EXPECT_EQ(last.fault, FaultCode::kNone);
+  EXPECT_EQ(last.mode, LoopMode::kVelocity);
+  EXPECT_EQ(rig.loop->run_samples_dropped(), 0U);
+}
+
+TEST(ControlLoop, RunSamplesKeepTheirRateWhenCyclesAreLateOrSkipped) {
+  LoopOptions o = test_options();
+  o.run_sample_rate_hz = 100.0;
+  LoopRig rig(o);
+  // Wake-up jitter of a third of a period either way, and a skipped deadline now and then
+  // (the loop skips the cycles it missed): still one sample per 10 ms.
+  const double t0 = rig.t_s;
+  std::vector<double> stamps;
+  RunSample r;
+  for (int k = 1; k <= 2000; ++k) {
+    if (k % 97 == 0) continue;  // a skipped deadline
+    const double jitter_s = (k % 3 == 0 ? 0.3 : (k % 3 == 1 ? -0.3 : 0.0)) * kDtS;
+    rig.loop->run_cycle(t0 + k * kDtS + jitter_s);
+    while (rig.loop->take_run_sample(r)) stamps.push_back(r.stamp_s);
+  }
+  ASSERT_EQ(stamps.size(), 200U);
+  for (std::size_t k = 1; k < stamps.size(); ++k) {
+    // At most a skipped cycle plus the jitter of two wake-ups apart from 10 ms.
+    EXPECT_NEAR(stamps[k] - stamps[k - 1], 0.01, 0.0017) << "at sample " << k;
+  }
+}
+
+TEST(ControlLoop, AFullRunSampleRingDropsAndCountsInsteadOfBlocking) {
+  LoopOptions o = test_options();
+  o.run_sample_rate_hz = 1000.0;  // every cycle
+  LoopRig rig(o);
+  const auto capacity = ControlLoop::kRunSampleRingCapacity;
+  rig.step(static_cast<int>(capacity) + 30);  // nobody takes them
+  EXPECT_EQ(rig.loop->run_samples_dropped(), 30U);
+  RunSample r;
+  std::uint64_t last = 0;
+  while (rig.loop->take_run_sample(r)) last = r.sequence;
+  EXPECT_EQ(last, capacity);
+  rig.step();
+  ASSERT_TRUE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(r.sequence, capacity + 31) << "the lost samples show as a jump in the sequence";
+}
+
+TEST(ControlLoop, RunSamplesOffByDefaultAndRateChecked) {
+  LoopRig rig;
+  rig.step(50);
+  RunSample r;
+  EXPECT_FALSE(rig.loop->take_run_sample(r));
+  EXPECT_EQ(rig.loop->run_sample_period_s(), 0.0);
+  FakeHardware hw;
+  FakeDrivetrain dt;
+  FakeLocalization loc;
+  for (const double bad : {-1.0, 2000.0, kNaN}) {
+    LoopOptions o = test_options();
+    o.run_sample_rate_hz = bad;
+    EXPECT_THROW(ControlLoop(o, hw, dt, loc, "fake"), std::invalid_argument) << bad;
+  }
 }
 
 TEST(ControlLoopThread, RunsAndStopsWithZeroSetpoints) {

@@ -95,7 +95,7 @@ TEST(RunLog, SwpcRoundTripIsExact) {
 
 TEST(RunLog, DifferentialRowsWithoutTruthHaveEmptyCells) {
   std::ostringstream out;
-  RunLogWriter writer(out, RunLogHeader{"docent", DrivetrainKind::kDifferential, 2, {}});
+  RunLogWriter writer(out, RunLogHeader{"docent", DrivetrainKind::kDifferential, 2, {}, false});
   RunLogSample s;
   s.t_s = 0.5;
   s.wheel_rad[0] = 1.5;
@@ -167,8 +167,8 @@ TEST(RunLog, MissingHeaderRowIsReported) {
       "# swivel-run 1\n# robot: docent\n# drivetrain: differential\n0,0,0,0,0,0,0,,,\n";
   EXPECT_EQ(expect_error(text),
             "run.csv:4: expected header row "
-            "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw', got "
-            "'0,0,0,0,0,0,0,,,'");
+            "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw' "
+            "(optionally followed by ',est_x,est_y,est_yaw,fault'), got '0,0,0,0,0,0,0,,,'");
   EXPECT_EQ(expect_error("# swivel-run 1\n# drivetrain: differential\n"),
             "run.csv:2: missing header row "
             "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw'");
@@ -197,9 +197,103 @@ TEST(RunLog, TruncatedLastLineIsReported) {
   EXPECT_EQ(expect_error(text), "run.csv:6: expected 10 columns, got 5");
 }
 
+TEST(RunLog, EstimateColumnsRoundTripExactly) {
+  RunLogHeader header;
+  header.robot = "docent";
+  header.estimate_columns = true;
+  const auto columns = run_log_columns(header);
+  ASSERT_EQ(columns.size(), 14U);
+  EXPECT_EQ(columns[10], "est_x");
+  EXPECT_EQ(columns[13], "fault");
+
+  std::ostringstream out;
+  std::vector<RunLogSample> written;
+  {
+    RunLogWriter writer(out, header);
+    for (int k = 0; k < 20; ++k) {
+      RunLogSample s;
+      s.t_s = 0.01 * k;
+      s.cmd = Twist2{0.3, 0.0, 0.1 * k};
+      s.wheel_rad = {0.1 * k, 0.2 * k};
+      s.gyro_wz_radps = 1.0 / 7.0;
+      s.has_truth = k % 2 == 0;
+      if (s.has_truth) s.truth = Pose2{0.003 * k, -1e-5 * k, 0.5};
+      s.estimate = Pose2{0.0031 * k, 1.0 / 3.0, -0.25 * k};
+      s.fault_code = static_cast<std::uint16_t>(k == 7 ? 65535 : k % 3);
+      writer.write(s);
+      written.push_back(s);
+    }
+  }
+  EXPECT_NE(out.str().find(",truth_yaw,est_x,est_y,est_yaw,fault\n"), std::string::npos);
+  EXPECT_NE(out.str().find(",,,0.0031,0.3333333333333333,-0.25,1\n"), std::string::npos)
+      << "a row without truth keeps its three empty cells before the estimate";
+  std::istringstream in(out.str());
+  const RunLog log = parse_run_log(in, "mem");
+  EXPECT_TRUE(log.header.estimate_columns);
+  ASSERT_EQ(log.samples.size(), written.size());
+  for (std::size_t k = 0; k < written.size(); ++k) {
+    const RunLogSample& a = written[k];
+    const RunLogSample& b = log.samples[k];
+    EXPECT_EQ(a.t_s, b.t_s);
+    EXPECT_EQ(a.wheel_rad[1], b.wheel_rad[1]);
+    ASSERT_EQ(a.has_truth, b.has_truth);
+    if (a.has_truth) {
+      EXPECT_EQ(a.truth.x_m, b.truth.x_m);
+    }
+    EXPECT_EQ(a.estimate.x_m, b.estimate.x_m);
+    EXPECT_EQ(a.estimate.y_m, b.estimate.y_m);
+    EXPECT_EQ(a.estimate.yaw_rad, b.estimate.yaw_rad);
+    EXPECT_EQ(a.fault_code, b.fault_code);
+  }
+}
+
+TEST(RunLog, LogsWithoutEstimateColumnsStillReadAndAreWrittenWithout) {
+  std::istringstream in(std::string(kDifferentialHead) + "0,0.1,0,0,1,2,0,3,4,5\n");
+  const RunLog log = parse_run_log(in, "old.csv");
+  EXPECT_FALSE(log.header.estimate_columns);
+  ASSERT_EQ(log.samples.size(), 1U);
+  EXPECT_EQ(log.samples[0].truth.yaw_rad, 5.0);
+  EXPECT_EQ(log.samples[0].fault_code, 0);
+
+  // Not asked for: the writer leaves them out even when a sample carries an estimate.
+  std::ostringstream out;
+  RunLogWriter writer(out, log.header);
+  RunLogSample s = log.samples[0];
+  s.estimate = Pose2{1.0, 2.0, 3.0};
+  s.fault_code = 4;
+  writer.write(s);
+  EXPECT_EQ(out.str(), std::string(kDifferentialHead) + "0,0.1,0,0,1,2,0,3,4,5\n");
+}
+
+TEST(RunLog, BadEstimateColumnsAreReported) {
+  const std::string head =
+      "# swivel-run 1\n# robot: docent\n# drivetrain: differential\n"
+      "t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw,est_x,est_y,"
+      "est_yaw,fault\n";
+  EXPECT_EQ(expect_error(head + "0,0,0,0,0,0,0,,,,1,2,3,1.5\n"),
+            "run.csv:5: column fault: expected a fault code (an integer in [0, 65535]), got '1.5'");
+  EXPECT_EQ(expect_error(head + "0,0,0,0,0,0,0,,,,1,2,3,-1\n"),
+            "run.csv:5: column fault: expected a fault code (an integer in [0, 65535]), got '-1'");
+  EXPECT_EQ(expect_error(head + "0,0,0,0,0,0,0,,,,1,2,3,65536\n"),
+            "run.csv:5: column fault: expected a fault code (an integer in [0, 65535]), got "
+            "'65536'");
+  EXPECT_EQ(expect_error(head + "0,0,0,0,0,0,0,,,,1,,3,0\n"),
+            "run.csv:5: column est_y: expected a finite number, got ''");
+  EXPECT_EQ(expect_error(head + "0,0,0,0,0,0,0,,,\n"), "run.csv:5: expected 14 columns, got 10");
+  // Only part of the optional group is not a known layout.
+  EXPECT_EQ(expect_error("# swivel-run 1\n# drivetrain: differential\n"
+                         "t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,"
+                         "truth_yaw,est_x\n"),
+            "run.csv:3: expected header row "
+            "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw' "
+            "(optionally followed by ',est_x,est_y,est_yaw,fault'), got "
+            "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw,est_x'");
+}
+
 TEST(RunLog, WriterRejectsImpossibleHeaders) {
   std::ostringstream out;
-  EXPECT_THROW(RunLogWriter(out, RunLogHeader{"x", DrivetrainKind::kDifferential, 3, {}}), RunLogError);
+  EXPECT_THROW(RunLogWriter(out, RunLogHeader{"x", DrivetrainKind::kDifferential, 3, {}, false}),
+               RunLogError);
   EXPECT_THROW(RunLogWriter(out, swpc_header(1)), RunLogError);
   EXPECT_THROW(RunLogWriter("/nonexistent-dir/run.csv", swpc_header(4)), RunLogError);
 }

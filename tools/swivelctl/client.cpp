@@ -38,11 +38,14 @@ std::string seconds_text(std::chrono::duration<double> d) {
   return out.str();
 }
 
-dds_entity_t Client::reader(const dds_topic_descriptor_t* descriptor, const char* topic) {
+dds_entity_t Client::reader(const dds_topic_descriptor_t* descriptor, const char* topic,
+                            const dds_qos_t* qos) {
   const dds_entity_t t = dds::create_topic(participant_.handle(), descriptor, topic);
-  const dds::QosPtr qos = dds::default_qos(10);
-  const dds_entity_t r = dds::check(dds_create_reader(participant_.handle(), t, qos.get(), nullptr),
-                                    "dds_create_reader");
+  const dds::QosPtr default_qos = dds::default_qos(10);
+  const dds_entity_t r =
+      dds::check(dds_create_reader(participant_.handle(), t,
+                                   qos != nullptr ? qos : default_qos.get(), nullptr),
+                 "dds_create_reader");
   conditions_[r] =
       dds::check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
   return r;

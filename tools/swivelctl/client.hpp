@@ -23,7 +23,9 @@ class Client {
   /// Joins `domain_id` with tool_config_uri() (CYCLONEDDS_URI or the loopback file).
   explicit Client(std::uint32_t domain_id);
 
-  dds_entity_t reader(const dds_topic_descriptor_t* descriptor, const char* topic);
+  /// A reader with Swivel's default QoS (reliable, keep last 10), or with `qos`.
+  dds_entity_t reader(const dds_topic_descriptor_t* descriptor, const char* topic,
+                      const dds_qos_t* qos = nullptr);
   dds_entity_t writer(const dds_topic_descriptor_t* descriptor, const char* topic);
 
   /// Waits until one of `readers` has data or `timeout` passes; false on timeout or

@@ -15,6 +15,7 @@
 #include "calibrate.hpp"
 #include "client.hpp"
 #include "format.hpp"
+#include "record.hpp"
 #include "request.hpp"
 #include "swivel.h"
 #include "swivel/cli/command_line.hpp"
@@ -332,6 +333,7 @@ int main(int argc, char** argv) {
   add_common(set_pose, true);
 
   add_calibrate_command(app);
+  add_record_command(app);
 
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivelctl")) return *exit;
   install_signal_handlers();

@@ -229,6 +229,8 @@ void DdsBridge::stop() noexcept {
   }
 }
 
+dds_entity_t DdsBridge::participant() const { return dds_->participant.handle(); }
+
 BridgeCounters DdsBridge::counters() const {
   BridgeCounters c;
   c.states_published = states_published_.load();

@@ -72,6 +72,12 @@ DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
   options.publish_rate_hz = reader.number_or("publish_rate_hz", 100.0, 1.0, 1000.0);
   options.diagnostics_rate_hz = reader.number_or("diagnostics_rate_hz", 2.0, 0.1, 100.0);
   options.history_depth = reader.integer_or("history_depth", 1, 1, 10);
+  const YAML::Node run_samples = reader.raw("run_samples_rate_hz");
+  if (run_samples.IsDefined() && run_samples.IsScalar() && run_samples.Scalar() == "off") {
+    options.run_samples_rate_hz = 0.0;
+  } else {
+    options.run_samples_rate_hz = reader.number_or("run_samples_rate_hz", 100.0, 0.0, 1000.0);
+  }
 
   ParamReader ros2 = reader.child("ros2");
   options.ros2.enabled = ros2.boolean_or("enabled", false);

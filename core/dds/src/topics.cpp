@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <mutex>
 #include <set>
@@ -19,10 +20,10 @@ dds_return_t check(dds_return_t rc, const char* what) {
 
 namespace {
 
-QosPtr make_qos(int depth, dds_reliability_kind_t reliability) {
+QosPtr make_qos(int depth, dds_reliability_kind_t reliability, int max_depth = 100) {
   QosPtr qos(dds_create_qos());
   dds_qset_reliability(qos.get(), reliability, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, depth < 1 ? 1 : (depth > 100 ? 100 : depth));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, std::clamp(depth, 1, max_depth));
   dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
   const dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
   dds_qset_data_representation(qos.get(), 1, &xcdr1);
@@ -49,6 +50,10 @@ void ensure_domain(std::uint32_t domain_id, const std::string& config_uri) {
 QosPtr default_qos(int depth) { return make_qos(depth, DDS_RELIABILITY_RELIABLE); }
 
 QosPtr best_effort_qos(int depth) { return make_qos(depth, DDS_RELIABILITY_BEST_EFFORT); }
+
+QosPtr run_samples_qos() {
+  return make_qos(kRunSamplesHistoryDepth, DDS_RELIABILITY_RELIABLE, kRunSamplesHistoryDepth);
+}
 
 Participant::Participant(const ParticipantOptions& options) {
   if (!options.config_uri.empty()) ensure_domain(options.domain_id, options.config_uri);

@@ -9,7 +9,16 @@
 //   t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw
 //
 // swpc rows carry steer_1..steer_N then wheel_1..wheel_N in place of wheel_l, wheel_r.
-// The truth columns (motion capture) are empty where a row has no sample. The command
+// The truth columns (motion capture) are empty where a row has no sample.
+//
+// Optional trailing columns, written only when RunLogHeader::estimate_columns is set (the
+// reader tells from the header row whether a log has them; logs without them read as before):
+//
+//   ...,truth_yaw,est_x,est_y,est_yaw,fault
+//
+// est_* are the daemon's pose estimate at the row (world frame, m, m, rad) and fault is the
+// active swivel::FaultCode as an integer (0: none). `swivelctl record` writes them; offline
+// tools that do not need them ignore them. The command
 // columns are the twist commanded at that row's time: a sample of a signal that may change
 // between rows (the daemon writes the latest control cycle's command at its record rate), not
 // a value held until the next row. A reader that needs the commands between rows reconstructs
@@ -23,6 +32,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <fstream>
 #include <iosfwd>
 #include <stdexcept>
@@ -53,6 +63,8 @@ struct RunLogHeader {
   /// Other comment lines (without "# "), e.g. how a run was made. Written after the fixed
   /// lines; the reader collects those that follow `# swivel-run` and interprets none.
   std::vector<std::string> comments;
+  /// The rows carry est_x, est_y, est_yaw and fault after the truth columns.
+  bool estimate_columns = false;
 };
 
 /// One row. For a differential robot wheel_rad[0] is the left and wheel_rad[1] the right
@@ -65,6 +77,10 @@ struct RunLogSample {
   double gyro_wz_radps = 0.0;
   bool has_truth = false;  ///< a motion-capture sample belongs to this row
   Pose2 truth;             ///< world frame; meaningful only when has_truth
+  /// The pose estimate at t_s, world frame, and the active fault (swivel::FaultCode, 0:
+  /// none): written and read only with RunLogHeader::estimate_columns.
+  Pose2 estimate;
+  std::uint16_t fault_code = 0;
 };
 
 /// A whole log in memory.
@@ -74,7 +90,8 @@ struct RunLog {
   std::vector<RunLogSample> samples;
 };
 
-/// The header row's column names for `header`, in order.
+/// The header row's column names for `header`, in order (the estimate columns included when
+/// header.estimate_columns).
 std::vector<std::string> run_log_columns(const RunLogHeader& header);
 
 /// The header a run of `model` gets (name, drivetrain, module count).
@@ -114,8 +131,8 @@ class RunLogWriter {
 /// Reads a run log. Unknown `#` comment lines are ignored; blank lines are skipped.
 /// @throws RunLogError naming the file and line: missing `# swivel-run` or `# drivetrain`
 ///   line, unsupported version, missing or wrong header row, a row with the wrong number
-///   of columns, a cell that is not a finite number, partly empty truth columns, or time
-///   going backwards.
+///   of columns, a cell that is not a finite number, partly empty truth columns, a fault
+///   cell that is not an integer in [0, 65535], or time going backwards.
 RunLog read_run_log(const std::string& path);
 
 /// Parses a run log from a stream; `source_name` is used in messages.

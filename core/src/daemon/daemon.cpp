@@ -26,6 +26,7 @@
 #include "service_integration.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/config/config_error.hpp"
+#include "swivel/dds/run_sample_publisher.hpp"
 #include "swivel/dds/topics.hpp"
 #include "swivel/rt/control_loop.hpp"
 
@@ -58,6 +59,11 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
       loader_(plugin_search_path(config_)) {
   dds_options_ = dds::parse_dds_options(config_.dds, config_.file, config_.config_dir);
   dds::complete_joints(config_.robot, config_.file, dds_options_.ros2);
+  if (dds_options_.run_samples_rate_hz > config_.rate_hz) {
+    throw ConfigError(fmt::format(
+        "{}: dds.run_samples_rate_hz: expected at most loop.rate_hz ({:g} Hz), got {:g}",
+        config_.file, config_.rate_hz, dds_options_.run_samples_rate_hz));
+  }
   robot_model_text_ = read_text(config_.robot_model_path);
   status_period_s_ = config_.status_period_s;
   PluginSet plugins = assemble_plugins(loader_, config_);
@@ -100,6 +106,8 @@ void Daemon::start() {
   loop_options.stop_angular_deceleration_radps2 =
       config_.controlled_stop.angular_deceleration_radps2;
   loop_options.twist_window_s = config_.twist_window_s;
+  // Run samples only for the DDS topic that carries them.
+  loop_options.run_sample_rate_hz = options_.dds ? dds_options_.run_samples_rate_hz : 0.0;
   rt::set_encoder_resolutions(config_.robot, loop_options);
   loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
                                             localization_->active(),
@@ -182,6 +190,16 @@ void Daemon::start_bridge() {
   bridge_ = std::make_unique<dds::DdsBridge>(dds_options_, config_.robot.name,
                                              std::move(callbacks));
   bridge_->start();
+  if (loop_->run_sample_period_s() > 0.0) {
+    // The ring's only consumer: every sample the loop produced since its first cycle.
+    run_samples_ = std::make_unique<dds::RunSamplePublisher>(
+        bridge_->participant(), config_.robot.name, config_.robot.drivetrain,
+        loop_->run_sample_period_s(),
+        [this](RunSample& out) { return loop_->take_run_sample(out); });
+    run_samples_->start();
+    spdlog::info("DDS: run samples on {} at {:g} Hz", dds::kRunSamplesTopic,
+                 1.0 / loop_->run_sample_period_s());
+  }
   spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
                dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,
                dds_options_.publish_rate_hz,
@@ -249,6 +267,14 @@ void Daemon::stop() noexcept {
   // 4. Only now everything around the loop. The bridge's threads stop before the runner is
   //    destroyed, since the runner publishes through the bridge.
   watcher_.reset();
+  // After the loop's final cycle: the recorders get the whole run before the writer goes.
+  if (run_samples_) {
+    run_samples_->stop();
+    const dds::RunSampleCounters c = run_samples_->counters();
+    spdlog::info("DDS: {} run samples published, {} lost in the loop's ring, {} refused by DDS",
+                 c.published, c.lost_at_source, c.write_failures);
+  }
+  run_samples_.reset();
   if (bridge_) bridge_->stop();
   calibration_.reset();
   bridge_.reset();

@@ -1,5 +1,6 @@
 #include "swivel/run_log.hpp"
 
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +19,8 @@ constexpr std::string_view kVersionKey = "swivel-run";
 constexpr std::string_view kRobotKey = "robot:";
 constexpr std::string_view kDrivetrainKey = "drivetrain:";
 constexpr std::string_view kModulesKey = "modules:";
+// The optional trailing columns (RunLogHeader::estimate_columns).
+constexpr std::array<const char*, 4> kEstimateColumns = {"est_x", "est_y", "est_yaw", "fault"};
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -80,9 +83,9 @@ class Parser {
     RunLog log;
     log.source = source_;
     read_comments(log.header);
-    const std::vector<std::string> columns = run_log_columns(log.header);
-    read_header_row(columns);
-    read_rows(log, columns.size());
+    std::vector<std::string> columns = run_log_columns(log.header);
+    read_header_row(log.header, columns);
+    read_rows(log, columns);
     return log;
   }
 
@@ -180,15 +183,28 @@ class Parser {
     validate_header(header, source_ + ":" + std::to_string(line_number_) + ": ");
   }
 
-  void read_header_row(const std::vector<std::string>& columns) {
+  // The header row decides whether the optional estimate columns follow the truth columns.
+  void read_header_row(RunLogHeader& header, std::vector<std::string>& columns) {
     const std::string expected = join(columns);
     if (!have_line_) fail("missing header row '" + expected + "'");
     split(line_, cells_);
-    bool match = cells_.size() == columns.size();
-    for (std::size_t i = 0; match && i < columns.size(); ++i) match = cells_[i] == columns[i];
-    if (!match) {
-      fail("expected header row '" + expected + "', got '" + std::string(trim(line_)) + "'");
+    const auto matches = [this](const std::vector<std::string>& names) {
+      bool match = cells_.size() == names.size();
+      for (std::size_t i = 0; match && i < names.size(); ++i) match = cells_[i] == names[i];
+      return match;
+    };
+    if (matches(columns)) return;
+    RunLogHeader with_estimate = header;
+    with_estimate.estimate_columns = true;
+    std::vector<std::string> extended = run_log_columns(with_estimate);
+    if (matches(extended)) {
+      header.estimate_columns = true;
+      columns = std::move(extended);
+      return;
     }
+    fail("expected header row '" + expected + "' (optionally followed by '," +
+         join(std::vector<std::string>(kEstimateColumns.begin(), kEstimateColumns.end())) +
+         "'), got '" + std::string(trim(line_)) + "'");
   }
 
   double number(std::string_view cell, const std::string& column) const {
@@ -201,8 +217,8 @@ class Parser {
     return value;
   }
 
-  void read_rows(RunLog& log, std::size_t column_count) {
-    const std::vector<std::string> names = run_log_columns(log.header);
+  void read_rows(RunLog& log, const std::vector<std::string>& names) {
+    const std::size_t column_count = names.size();
     const std::size_t n = log.header.module_count;
     const bool swpc = log.header.drivetrain == DrivetrainKind::kSwpc;
     while (next_line()) {
@@ -239,6 +255,19 @@ class Parser {
         s.truth.yaw_rad = next();
       } else if (empty != 3) {
         fail("truth_x, truth_y and truth_yaw must be all present or all empty");
+      } else {
+        c += 3;
+      }
+      if (log.header.estimate_columns) {
+        s.estimate.x_m = next();
+        s.estimate.y_m = next();
+        s.estimate.yaw_rad = next();
+        const double fault = next();
+        if (fault < 0.0 || fault > 65535.0 || fault != std::floor(fault)) {
+          fail("column fault: expected a fault code (an integer in [0, 65535]), got '" +
+               std::string(cells_[c - 1]) + "'");
+        }
+        s.fault_code = static_cast<std::uint16_t>(fault);
       }
       if (!log.samples.empty() && s.t_s < log.samples.back().t_s) {
         std::string previous;
@@ -274,6 +303,9 @@ std::vector<std::string> run_log_columns(const RunLogHeader& header) {
   }
   for (const char* name : {"gyro_wz", "truth_x", "truth_y", "truth_yaw"}) {
     columns.emplace_back(name);
+  }
+  if (header.estimate_columns) {
+    for (const char* name : kEstimateColumns) columns.emplace_back(name);
   }
   return columns;
 }
@@ -334,6 +366,13 @@ void RunLogWriter::write(const RunLogSample& s) {
     append_number(line_, s.truth.yaw_rad);
   } else {
     line_ += ",,";  // three empty truth cells
+  }
+  if (header_.estimate_columns) {
+    line_ += ',';
+    add(s.estimate.x_m);
+    add(s.estimate.y_m);
+    add(s.estimate.yaw_rad);
+    line_ += std::to_string(s.fault_code);
   }
   line_ += '\n';
   out_->write(line_.data(), static_cast<std::streamsize>(line_.size()));

@@ -7,8 +7,9 @@
 // Threads: the main thread (run_until_signal) owns reloads, hot swaps, requests, the
 // watchdog and the calibration's periodic work; the loop thread runs the plugins; the
 // bridge has a publisher and a subscriber thread (which queues requests for the main
-// thread); the script command source, the recorder and the file watcher have one thread
-// each. Nothing added here runs on the loop thread.
+// thread); the run-sample publisher (swivel_run_samples, fed by the loop's run-sample
+// ring), the script command source, the recorder and the file watcher have one thread each.
+// Nothing added here runs on the loop thread.
 //
 // Requests (DDS Request and SetPose, ROS 2 initialpose) are answered one at a time by the
 // main thread, each with a Reply carrying its request id:
@@ -54,6 +55,9 @@
 
 namespace swivel::rt {
 class ControlLoop;
+}
+namespace swivel::dds {
+class RunSamplePublisher;
 }
 
 namespace swivel::daemon {
@@ -169,6 +173,7 @@ class Daemon {
   std::unique_ptr<LoopRequests> loop_requests_;
   std::unique_ptr<DiagnosticsSource> diagnostics_;  // publisher thread
   std::unique_ptr<dds::DdsBridge> bridge_;
+  std::unique_ptr<dds::RunSamplePublisher> run_samples_;  // on the bridge's participant
   std::unique_ptr<CalibrationService> calibration_;
   std::unique_ptr<ConfigWatcher> watcher_;
   std::unique_ptr<ScriptCommandSource> script_;

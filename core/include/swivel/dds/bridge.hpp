@@ -12,6 +12,8 @@
 // the caller's. publish_calibration() and publish_reply() may be called from any thread.
 // Nothing here is real-time safe.
 
+#include <dds/dds.h>
+
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -153,6 +155,9 @@ class DdsBridge {
 
   [[nodiscard]] BridgeCounters counters() const;
   [[nodiscard]] const std::string& robot_id() const { return robot_id_; }
+  /// The bridge's participant, for other writers of the daemon (RunSamplePublisher); valid
+  /// while the bridge lives.
+  [[nodiscard]] dds_entity_t participant() const;
   [[nodiscard]] const DdsOptions& options() const { return options_; }
 
  private:

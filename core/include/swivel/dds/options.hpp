@@ -61,6 +61,9 @@ struct DdsOptions {
   double publish_rate_hz = 100.0;   ///< dds.publish_rate_hz: state and module states (1..1000)
   double diagnostics_rate_hz = 2.0; ///< dds.diagnostics_rate_hz (0.1..100)
   int history_depth = 1;            ///< dds.history_depth: keep-last depth of writers (1..10)
+  /// dds.run_samples_rate_hz: run samples on swivel_run_samples (what `swivelctl record`
+  /// writes to a run log), 0..1000 and at most the loop rate; 0 or `off`: none.
+  double run_samples_rate_hz = 100.0;
   Ros2Options ros2;                 ///< dds.ros2
 };
 

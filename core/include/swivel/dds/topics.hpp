@@ -22,6 +22,11 @@ inline constexpr const char* kMotionCaptureTopic = "swivel_motion_capture";
 inline constexpr const char* kRequestTopic = "swivel_command";
 inline constexpr const char* kSetPoseTopic = "swivel_set_pose";
 inline constexpr const char* kReplyTopic = "swivel_reply";
+inline constexpr const char* kRunSamplesTopic = "swivel_run_samples";
+
+/// Keep-last depth of swivel_run_samples on both ends: 20 s at the default 100 Hz, so that a
+/// recorder that stalls that long still gets every sample.
+inline constexpr int kRunSamplesHistoryDepth = 2000;
 
 /// A DDS call failed; the message names the call and Cyclone's return code.
 class DdsError : public std::runtime_error {
@@ -44,6 +49,12 @@ QosPtr default_qos(int depth = 1);
 /// As default_qos but best-effort: used for readers of streamed commands (ROS 2 cmd_vel)
 /// so that both best-effort and reliable writers match.
 QosPtr best_effort_qos(int depth = 1);
+
+/// QoS of swivel_run_samples, for the daemon's writer and a recorder's reader alike: reliable
+/// (a lost packet is resent), keep-last kRunSamplesHistoryDepth (room for the writer to
+/// resend and for a reader that falls behind), volatile (a recording starts when the recorder
+/// joins), plain CDR.
+QosPtr run_samples_qos();
 
 /// The participant's domain and Cyclone configuration.
 struct ParticipantOptions {

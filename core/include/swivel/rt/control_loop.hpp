@@ -70,6 +70,7 @@
 #include "swivel/rt/odometry_monitor.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
+#include "swivel/rt/run_sample.hpp"
 #include "swivel/rt/snapshot_buffer.hpp"
 #include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
@@ -105,6 +106,12 @@ struct LoopOptions {
   /// How often a non-real-time thread re-measures the offset of the realtime clock (ROS
   /// time) from the loop's monotonic clock, s (see ClockOffset).
   double clock_offset_refresh_s = 1.0;
+  /// Run samples per second handed to a recorder through take_run_sample(); 0: none; at
+  /// most rate_hz. They follow the clock, not a cycle count: a sample is due every
+  /// 1 / run_sample_rate_hz from the first cycle and taken at the first cycle within half a
+  /// loop period of that, so late or skipped cycles do not slow the rate down. A rate that
+  /// divides rate_hz gives evenly spaced samples.
+  double run_sample_rate_hz = 0.0;
 };
 
 /// Readings in the twist window of `options` (TwistWindowOptions::readings).
@@ -183,6 +190,23 @@ class ControlLoop {
   /// newest sample to the localization as HardwareState::motion_capture when the hardware
   /// reading carries none.
   bool push_motion_capture(const MotionCaptureSample& sample) noexcept;
+
+  /// The recording thread only (single consumer). Real-time safe. Copies out the oldest run
+  /// sample not taken yet (LoopOptions::run_sample_rate_hz); false when there is none. The
+  /// ring holds kRunSampleRingCapacity samples (5 s at 100 Hz): a consumer that falls further
+  /// behind loses the newest ones, which shows as a jump in RunSample::sequence.
+  bool take_run_sample(RunSample& out) noexcept { return run_samples_.try_pop(out); }
+
+  /// Any thread. Run samples the loop could not hand over because the ring was full.
+  [[nodiscard]] std::uint64_t run_samples_dropped() const noexcept {
+    return run_samples_dropped_.load(std::memory_order_relaxed);
+  }
+
+  /// Any thread. The time between two run samples the loop produces, s; 0 when it produces
+  /// none.
+  [[nodiscard]] double run_sample_period_s() const noexcept { return run_sample_period_s_; }
+
+  static constexpr std::size_t kRunSampleRingCapacity = 512;
 
   /// Any thread. Real-time safe (lock-free; retries while the loop writes). The state at the
   /// end of the newest cycle.
@@ -319,6 +343,7 @@ class ControlLoop {
   void check_odometry(const OdometryIncrement& odometry, double now_s) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
+  void push_run_sample() noexcept;
   bool hold_hardware() noexcept;
   void take_request(double now_s, std::uint64_t& clear_id) noexcept;
   void answer_clear(std::uint64_t id, double now_s) noexcept;
@@ -372,6 +397,8 @@ class ControlLoop {
   /// Motion-capture samples taken per cycle at most: the ring's capacity.
   static constexpr std::size_t kMotionCaptureDrainLimit = decltype(motion_capture_)::capacity();
   SnapshotBuffer<StateSnapshot> snapshot_;
+  SpscRing<RunSample, kRunSampleRingCapacity> run_samples_;
+  std::atomic<std::uint64_t> run_samples_dropped_{0};
   TimingStats timing_;
   RtLog log_;
 
@@ -401,6 +428,11 @@ class ControlLoop {
   bool stopping_ = false;         // the controlled stop was taken
   double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
+  double run_sample_period_s_ = 0.0;        // 0: no run samples
+  double next_run_sample_s_ = 0.0;          // when the next one is due
+  std::uint64_t run_sample_sequence_ = 0;   // run samples produced
+  MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
+  Twist2 run_sample_command_{};             // this cycle's target before the limits
 
   // Non-real-time ownership.
   ClockOffset clock_offset_;
