@@ -40,11 +40,9 @@ TEST(ImuMounting, UpsideDownAndPitchedMountings) {
   // Upside down (rolled by pi): the IMU's z points down, the rate changes sign.
   EXPECT_NEAR(ImuMounting::from_rpy(kPi, 0.0, 0.0).yaw_rate_radps(0.0, 0.0, 0.5), -0.5, 1e-15);
   // Pitched by +90 degrees: the IMU's x axis points down (R e_x = -e_z).
-  EXPECT_NEAR(ImuMounting::from_rpy(0.0, kPi / 2, 0.0).yaw_rate_radps(0.4, 0.0, 0.0), -0.4,
-              1e-15);
+  EXPECT_NEAR(ImuMounting::from_rpy(0.0, kPi / 2, 0.0).yaw_rate_radps(0.4, 0.0, 0.0), -0.4, 1e-15);
   // Rolled by +90 degrees: the IMU's y axis points up (R e_y = e_z).
-  EXPECT_NEAR(ImuMounting::from_rpy(kPi / 2, 0.0, 0.0).yaw_rate_radps(0.0, 0.6, 0.0), 0.6,
-              1e-15);
+  EXPECT_NEAR(ImuMounting::from_rpy(kPi / 2, 0.0, 0.0).yaw_rate_radps(0.0, 0.6, 0.0), 0.6, 1e-15);
 }
 
 TEST(ImuMounting, MatchesTheFullRotationForArbitraryMountings) {
@@ -77,8 +75,8 @@ TEST(PoseToMotionCapture, TakesTheYawOfTheQuaternionAndTheReceptionStamp) {
   const Eigen::Quaterniond tilted(Eigen::AngleAxisd(-2.5, Eigen::Vector3d::UnitZ()) *
                                   Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()) *
                                   Eigen::AngleAxisd(-0.05, Eigen::Vector3d::UnitX()));
-  ASSERT_TRUE(pose_to_motion_capture(0.0, 0.0, tilted.x(), tilted.y(), tilted.z(), tilted.w(),
-                                     1.0, m));
+  ASSERT_TRUE(
+      pose_to_motion_capture(0.0, 0.0, tilted.x(), tilted.y(), tilted.z(), tilted.w(), 1.0, m));
   EXPECT_NEAR(m.pose.yaw_rad, -2.5, 1e-12);
 }
 
@@ -90,8 +88,8 @@ TEST(PoseToMotionCapture, RefusesWhatIsNotARotationOrAPosition) {
   EXPECT_FALSE(pose_to_motion_capture(1.0, 2.0, 0.0, 0.0, 0.0, 2.0, 1.0, m));  // norm 2
   EXPECT_FALSE(pose_to_motion_capture(1.0, 2.0, 0.0, 0.0, nan, 1.0, 1.0, m));
   EXPECT_FALSE(pose_to_motion_capture(nan, 2.0, 0.0, 0.0, 0.0, 1.0, 1.0, m));
-  EXPECT_FALSE(pose_to_motion_capture(1.0, std::numeric_limits<double>::infinity(), 0.0, 0.0,
-                                      0.0, 1.0, 1.0, m));
+  EXPECT_FALSE(pose_to_motion_capture(1.0, std::numeric_limits<double>::infinity(), 0.0, 0.0, 0.0,
+                                      1.0, 1.0, m));
   EXPECT_FALSE(m.valid);
   EXPECT_EQ(m.pose.x_m, 9.0) << "a refused pose leaves the sample as it was";
 }
@@ -178,8 +176,7 @@ TEST(SensorOptions, LoopCausesNameTheTopics) {
 
   // A long topic is cut at the end of the cause, never in the topic's first 63 characters.
   const std::string long_name(70, 'a');
-  const DdsOptions long_topic =
-      parse("{ros2: {enabled: true, imu: {topic: /" + long_name + "}}}");
+  const DdsOptions long_topic = parse("{ros2: {enabled: true, imu: {topic: /" + long_name + "}}}");
   const std::string cause = loop_sensor_options(long_topic.ros2).gyro.stale_detail.data();
   EXPECT_EQ(cause.size(), 63U);
   EXPECT_EQ(cause, ("rt/" + long_name).substr(0, 63));

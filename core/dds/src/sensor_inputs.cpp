@@ -99,9 +99,10 @@ void SensorInputs::take_imu() {
     sample.wz_radps = mounting_.yaw_rate_radps(w.x, w.y, w.z);
     if (!std::isfinite(sample.wz_radps)) {
       if (imu_rejected_.fetch_add(1, std::memory_order_relaxed) == 0) {
-        spdlog::warn("dds: {}: IMU sample with a non-finite angular velocity ({}, {}, {}) "
-                     "dropped; further ones are counted",
-                     ros2_.imu.dds_topic, w.x, w.y, w.z);
+        spdlog::warn(
+            "dds: {}: IMU sample with a non-finite angular velocity ({}, {}, {}) "
+            "dropped; further ones are counted",
+            ros2_.imu.dds_topic, w.x, w.y, w.z);
       }
       return;
     }
@@ -121,9 +122,10 @@ void SensorInputs::take_poses() {
         MotionCaptureSample sample;
         if (!pose_to_motion_capture(p.x, p.y, q.x, q.y, q.z, q.w, monotonic_s(), sample)) {
           if (poses_rejected_.fetch_add(1, std::memory_order_relaxed) == 0) {
-            spdlog::warn("dds: {}: pose dropped: position ({}, {}) or orientation ({}, {}, {}, {}) "
-                         "is not a pose (a quaternion must have norm 1); further ones are counted",
-                         ros2_.mocap_pose.dds_topic, p.x, p.y, q.x, q.y, q.z, q.w);
+            spdlog::warn(
+                "dds: {}: pose dropped: position ({}, {}) or orientation ({}, {}, {}, {}) "
+                "is not a pose (a quaternion must have norm 1); further ones are counted",
+                ros2_.mocap_pose.dds_topic, p.x, p.y, q.x, q.y, q.z, q.w);
           }
           return;
         }

@@ -428,8 +428,8 @@ void ControlLoop::take_external_gyro(double now_s) noexcept {
       has_external_gyro_ = true;
       gyro_watch_.observe(g.received_s);
     } else {
-      log_event(LogLevel::kWarn, LogCode::kMessage, now_s, "non-finite external gyro sample dropped",
-                g.received_s, g.wz_radps);
+      log_event(LogLevel::kWarn, LogCode::kMessage, now_s,
+                "non-finite external gyro sample dropped", g.received_s, g.wz_radps);
     }
   });
 }

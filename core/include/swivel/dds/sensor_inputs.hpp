@@ -60,11 +60,11 @@ struct SensorCallbacks {
 
 /// Counters of the sensor inputs.
 struct SensorCounters {
-  std::uint64_t imu_received = 0;         ///< accepted by on_gyro
-  std::uint64_t imu_rejected = 0;         ///< non-finite angular velocity
-  std::uint64_t mocap_poses_received = 0; ///< accepted by on_motion_capture
-  std::uint64_t mocap_poses_rejected = 0; ///< not a rotation, or a non-finite position
-  std::uint64_t dropped = 0;              ///< refused by a callback (ring full) or no callback
+  std::uint64_t imu_received = 0;          ///< accepted by on_gyro
+  std::uint64_t imu_rejected = 0;          ///< non-finite angular velocity
+  std::uint64_t mocap_poses_received = 0;  ///< accepted by on_motion_capture
+  std::uint64_t mocap_poses_rejected = 0;  ///< not a rotation, or a non-finite position
+  std::uint64_t dropped = 0;               ///< refused by a callback (ring full) or no callback
 };
 
 /// The readers of the configured ROS 2 sensor topics. Best effort, so that both best-effort

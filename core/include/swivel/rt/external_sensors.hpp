@@ -38,7 +38,7 @@ struct SensorWatchOptions {
 
 /// The external sources the loop takes samples from (LoopOptions::external_sensors).
 struct ExternalSensorOptions {
-  SensorWatchOptions gyro;            ///< when enabled, the newest sample replaces the reading's gyro
+  SensorWatchOptions gyro;  ///< when enabled, the newest sample replaces the reading's gyro
   SensorWatchOptions motion_capture;  ///< the watched motion-capture source
 };
 
@@ -67,8 +67,7 @@ class SensorWatch {
       start_s_ = now_s;
     }
     if (!has_sample_) {
-      return now_s - start_s_ > options_.startup_grace_s ? options_.silent_detail.data()
-                                                         : nullptr;
+      return now_s - start_s_ > options_.startup_grace_s ? options_.silent_detail.data() : nullptr;
     }
     return now_s - newest_s_ > options_.max_age_s ? options_.stale_detail.data() : nullptr;
   }
