@@ -181,6 +181,33 @@ TEST(SwiveldRos2, GyroFromARos2ImuAndItsSilenceStopsTheRobot) {
   EXPECT_EQ(fault, "none") << detail;
   EXPECT_NE(daemon.err().find("gyro from rt/it_imu/imu (sensor_msgs/Imu"), std::string::npos)
       << daemon.err();
+  // The diagnostics count the IMU's samples.
+  const dds_entity_t diagnostics_topic = dds::create_topic(
+      client.handle(), &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "rt/diagnostics");
+  const dds_entity_t diagnostics =
+      dds_create_reader(client.handle(), diagnostics_topic, reliable.get(), nullptr);
+  long imu_samples = -1;
+  deadline = std::chrono::steady_clock::now() + Seconds(10);
+  while (std::chrono::steady_clock::now() < deadline && imu_samples <= 0) {
+    sensor_msgs_msg_dds__Imu_ m{};
+    m.header.frame_id = const_cast<char*>("imu_link");
+    m.orientation.w = 1.0;
+    m.angular_velocity = {0.0, 0.0, -0.1};
+    ASSERT_EQ(dds_write(imu, &m), DDS_RETCODE_OK);
+    take_all<diagnostic_msgs_msg_dds__DiagnosticArray_>(diagnostics, [&](const auto& d) {
+      for (std::uint32_t i = 0; i < d.status._length; ++i) {
+        const auto& status = d.status._buffer[i];
+        if (std::string(status.hardware_id) != "docent") continue;
+        for (std::uint32_t k = 0; k < status.values._length; ++k) {
+          if (std::string(status.values._buffer[k].key) == "imu_samples") {
+            imu_samples = std::stol(status.values._buffer[k].value);
+          }
+        }
+      }
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_GT(imu_samples, 0) << "no imu_samples in the ROS 2 diagnostics";
 
   // The driver stops publishing: the robot safe-stops, the cause names the topic.
   deadline = std::chrono::steady_clock::now() + Seconds(10);

@@ -529,7 +529,7 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
                      : d.mode == LoopMode::kVelocity    ? "velocity"
                      : d.mode == LoopMode::kCalibration ? "calibration"
                                                         : "safe_stop";
-  const std::vector<std::pair<std::string, std::string>> values{
+  std::vector<std::pair<std::string, std::string>> values{
       {"mode", mode},
       {"fault", fault_code_name(d.fault)},
       {"fault_detail", d.fault_detail},
@@ -552,6 +552,21 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
       {"reload_count", std::to_string(d.reload_count)},
       {"last_reload", d.last_reload_result},
       {"restart_required", d.restart_required ? "true" : "false"}};
+  if (dds_->sensors) {
+    // The ROS 2 sensor topics' samples: a driver whose samples are all rejected shows here
+    // before its silence stops the robot.
+    const SensorCounters sensors = dds_->sensors->counters();
+    if (options_.ros2.imu.enabled) {
+      values.emplace_back("imu_samples", std::to_string(sensors.imu_received));
+      values.emplace_back("imu_samples_rejected", std::to_string(sensors.imu_rejected));
+    }
+    if (options_.ros2.mocap_pose.enabled) {
+      values.emplace_back("mocap_pose_samples", std::to_string(sensors.mocap_poses_received));
+      values.emplace_back("mocap_pose_samples_rejected",
+                          std::to_string(sensors.mocap_poses_rejected));
+    }
+    values.emplace_back("sensor_samples_dropped", std::to_string(sensors.dropped));
+  }
   std::vector<diagnostic_msgs_msg_dds__KeyValue_> pairs(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
     pairs[i].key = c_str(values[i].first);
