@@ -92,6 +92,7 @@ TEST(SensorWatch, StaleAfterMaxAgeAndSilentAfterTheGrace) {
   EXPECT_EQ(w.check(10.0), nullptr);  // starts the grace
   EXPECT_EQ(w.check(11.0), nullptr);  // at its end: not yet
   ASSERT_NE(w.check(11.001), nullptr);
+  EXPECT_EQ(w.limit_s(), 1.0);  // the grace, before the first sample
   EXPECT_STREQ(w.check(11.001), "rt/imu: silent");
   w.observe(11.0);
   EXPECT_EQ(w.check(11.049), nullptr);
@@ -99,6 +100,7 @@ TEST(SensorWatch, StaleAfterMaxAgeAndSilentAfterTheGrace) {
   w.observe(10.0);  // an older sample does not make it fresh
   EXPECT_STREQ(w.check(11.0501), "rt/imu: stale");
   EXPECT_NEAR(w.age_s(11.0501), 0.0501, 1e-12);
+  EXPECT_EQ(w.limit_s(), 0.05);
   SensorWatch off;
   EXPECT_EQ(off.check(1e9), nullptr);
 }

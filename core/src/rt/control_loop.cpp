@@ -463,11 +463,11 @@ void ControlLoop::take_motion_capture(double now_s, bool reading_ok) noexcept {
 void ControlLoop::check_external_sensors(double now_s) noexcept {
   if (const char* stale = gyro_watch_.check(now_s)) {
     raise_fault(FaultCode::kSensorStale, now_s, stale, gyro_watch_.age_s(now_s),
-                gyro_watch_.options().max_age_s);
+                gyro_watch_.limit_s());
   }
   if (const char* stale = motion_capture_watch_.check(now_s)) {
     raise_fault(FaultCode::kSensorStale, now_s, stale, motion_capture_watch_.age_s(now_s),
-                motion_capture_watch_.options().max_age_s);
+                motion_capture_watch_.limit_s());
   }
 }
 

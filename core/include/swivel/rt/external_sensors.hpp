@@ -82,6 +82,11 @@ class SensorWatch {
     return now_s - (has_sample_ ? newest_s_ : start_s_);
   }
 
+  /// The limit age_s() is held against: max_age_s, or the grace before the first sample.
+  [[nodiscard]] double limit_s() const noexcept {
+    return has_sample_ ? options_.max_age_s : options_.startup_grace_s;
+  }
+
   [[nodiscard]] bool enabled() const noexcept { return options_.enabled; }
   [[nodiscard]] const SensorWatchOptions& options() const noexcept { return options_; }
 
