@@ -47,11 +47,11 @@
 // Threads: the loop thread (or the caller of run_cycle()) runs every plugin call. One
 // command-source thread may call push_command() (velocity commands go through a latest-value
 // slot: the newest command wins), one external-sensor thread (the DDS subscriber)
-// push_motion_capture() and push_gyro(), one thread (the configuration watcher) the swap pair, one thread
-// (the calibration runner) the calibration calls, one thread (the daemon's request handler)
-// request_clear(), request_set_pose(), take_reply() and the hardware pause pair; any thread
-// may call latest(), timing(), clear_fault(), request_controlled_stop(), running() and
-// now_s().
+// push_motion_capture() and push_gyro(), one thread (the configuration watcher) the swap
+// pair, one thread (the calibration runner) the calibration calls, one thread (the daemon's
+// request handler) request_clear(), request_set_pose(), take_reply() and the hardware pause
+// pair; any thread may call latest(), timing(), clear_fault(), request_controlled_stop(),
+// running() and now_s().
 
 #include <atomic>
 #include <condition_variable>
