@@ -72,8 +72,8 @@ void convert(int topic, const void* sample) {
       // An upside-down, pitched and turned mounting: every IMU axis contributes.
       const auto& m = *static_cast<const sensor_msgs_msg_dds__Imu_*>(sample);
       const auto& w = m.angular_velocity;
-      const double wz = swivel::dds::ImuMounting::from_rpy(3.0, 0.4, 1.0)
-                            .yaw_rate_radps(w.x, w.y, w.z);
+      const double wz =
+          swivel::dds::ImuMounting::from_rpy(3.0, 0.4, 1.0).yaw_rate_radps(w.x, w.y, w.z);
       const double bound = std::abs(w.x) + std::abs(w.y) + std::abs(w.z);
       // A rotation does not lengthen a vector: finite in, finite and no larger out (inputs
       // whose sum of magnitudes overflows excepted).

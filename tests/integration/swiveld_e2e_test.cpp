@@ -147,8 +147,8 @@ TEST(Swiveld, CheckValidatesTheDynamixelImuExample) {
       << daemon.out();
 
   // Without the bridge the IMU could never arrive: refused up front.
-  Process no_dds({"--config", source_dir() + "/config/swiveld_dynamixel_imu.yaml", "--check",
-                  "--no-dds"});
+  Process no_dds(
+      {"--config", source_dir() + "/config/swiveld_dynamixel_imu.yaml", "--check", "--no-dds"});
   const auto refused = no_dds.wait_for(std::chrono::seconds(10));
   ASSERT_TRUE(refused && WIFEXITED(*refused));
   EXPECT_EQ(WEXITSTATUS(*refused), 1);

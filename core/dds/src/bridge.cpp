@@ -177,16 +177,14 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
         reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
                options_.ros2.initialpose_topic(), reader_qos.get());
     dds_->sensors = std::make_unique<SensorInputs>(
-        pp, options_.ros2,
-        SensorCallbacks{callbacks_.on_gyro, callbacks_.on_pose_motion_capture});
+        pp, options_.ros2, SensorCallbacks{callbacks_.on_gyro, callbacks_.on_pose_motion_capture});
   }
 
   dds_->waitset = check(dds_create_waitset(pp), "dds_create_waitset");
   const auto sensors = dds_->sensors ? dds_->sensors->readers() : std::array<dds_entity_t, 2>{};
-  for (const dds_entity_t r :
-       {dds_->command_reader, dds_->motion_capture_reader, dds_->request_reader,
-        dds_->set_pose_reader, dds_->cmd_vel_reader, dds_->initialpose_reader, sensors[0],
-        sensors[1]}) {
+  for (const dds_entity_t r : {dds_->command_reader, dds_->motion_capture_reader,
+                               dds_->request_reader, dds_->set_pose_reader, dds_->cmd_vel_reader,
+                               dds_->initialpose_reader, sensors[0], sensors[1]}) {
     if (r == 0) continue;
     const dds_entity_t condition =
         check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");

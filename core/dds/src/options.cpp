@@ -41,8 +41,10 @@ std::string resolve_topic(ParamReader& reader, const std::string& ros_namespace,
   const bool absolute = !name.empty() && name.front() == '/';
   const std::string bare = absolute ? name.substr(1) : name;
   if (bare.empty() || !valid_ros_name(bare)) {
-    reader.fail("topic", "expected a ROS 2 topic name (letters, digits, '_', '/'; '/' first for "
-                         "an absolute one), got '" + name + "'");
+    reader.fail("topic",
+                "expected a ROS 2 topic name (letters, digits, '_', '/'; '/' first for "
+                "an absolute one), got '" +
+                    name + "'");
   }
   return absolute ? "rt/" + bare : ros2_topic(ros_namespace, bare.c_str());
 }
@@ -50,8 +52,8 @@ std::string resolve_topic(ParamReader& reader, const std::string& ros_namespace,
 void parse_sensor_topic(ParamReader& reader, const std::string& ros_namespace,
                         const char* default_topic, Ros2SensorTopic& out) {
   out.enabled = true;
-  out.topic = default_topic != nullptr ? reader.string_or("topic", default_topic)
-                                       : reader.string("topic");
+  out.topic =
+      default_topic != nullptr ? reader.string_or("topic", default_topic) : reader.string("topic");
   out.dds_topic = resolve_topic(reader, ros_namespace, out.topic);
   out.rate_hz = reader.number_or("rate_hz", 100.0, 0.1, 10000.0);
   out.max_age_s = reader.number_or("max_age_s", kDefaultMaxAgePeriods / out.rate_hz, 0.001, 60.0);

@@ -206,16 +206,18 @@ void Daemon::start_bridge() {
                    : std::string());
   const auto& imu = dds_options_.ros2.imu;
   if (imu.enabled) {
-    spdlog::info("gyro from {} (sensor_msgs/Imu, mounting rpy [{}, {}, {}] rad), stale after "
-                 "{} s, {} s start-up grace",
-                 imu.dds_topic, imu.rotation_rpy_rad[0], imu.rotation_rpy_rad[1],
-                 imu.rotation_rpy_rad[2], imu.max_age_s, imu.startup_grace_s);
+    spdlog::info(
+        "gyro from {} (sensor_msgs/Imu, mounting rpy [{}, {}, {}] rad), stale after "
+        "{} s, {} s start-up grace",
+        imu.dds_topic, imu.rotation_rpy_rad[0], imu.rotation_rpy_rad[1], imu.rotation_rpy_rad[2],
+        imu.max_age_s, imu.startup_grace_s);
   }
   const auto& pose = dds_options_.ros2.mocap_pose;
   if (pose.enabled) {
-    spdlog::info("motion capture from {} (geometry_msgs/PoseStamped), stale after {} s, {} s "
-                 "start-up grace",
-                 pose.dds_topic, pose.max_age_s, pose.startup_grace_s);
+    spdlog::info(
+        "motion capture from {} (geometry_msgs/PoseStamped), stale after {} s, {} s "
+        "start-up grace",
+        pose.dds_topic, pose.max_age_s, pose.startup_grace_s);
   }
 }
 

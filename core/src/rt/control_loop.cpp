@@ -270,9 +270,7 @@ bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample,
   return motion_capture_.try_push({sample, source});
 }
 
-bool ControlLoop::push_gyro(const GyroSample& sample) noexcept {
-  return gyro_.try_push(sample);
-}
+bool ControlLoop::push_gyro(const GyroSample& sample) noexcept { return gyro_.try_push(sample); }
 
 bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
   if (next == nullptr) return false;
@@ -439,20 +437,19 @@ void ControlLoop::take_external_gyro(double now_s) noexcept {
 void ControlLoop::take_motion_capture(double now_s, bool reading_ok) noexcept {
   MotionCaptureInput input;
   MotionCaptureSample newest;
-  pop_at_most(motion_capture_, input, kMotionCaptureDrainLimit,
-              [&](const MotionCaptureInput& in) {
-                const MotionCaptureSample& m = in.sample;
-                if (!m.valid) return;
-                if (finite(m)) {
-                  newest = m;
-                  if (in.source == MotionCaptureSource::kWatched) {
-                    motion_capture_watch_.observe(m.stamp_s);
-                  }
-                } else {
-                  log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
-                            "non-finite motion-capture sample dropped", m.stamp_s);
-                }
-              });
+  pop_at_most(motion_capture_, input, kMotionCaptureDrainLimit, [&](const MotionCaptureInput& in) {
+    const MotionCaptureSample& m = in.sample;
+    if (!m.valid) return;
+    if (finite(m)) {
+      newest = m;
+      if (in.source == MotionCaptureSource::kWatched) {
+        motion_capture_watch_.observe(m.stamp_s);
+      }
+    } else {
+      log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
+                "non-finite motion-capture sample dropped", m.stamp_s);
+    }
+  });
   if (reading_ok && newest.valid && !current_.motion_capture.valid) {
     current_.motion_capture = newest;
   }

@@ -129,7 +129,7 @@ struct BridgeCounters {
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;   ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
-  SensorCounters sensors;                ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
+  SensorCounters sensors;  ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
 };
 
 class DdsBridge {

@@ -17,9 +17,9 @@ namespace swivel::dds {
 /// sensor_stale).
 struct Ros2SensorTopic {
   bool enabled = false;
-  std::string topic;      ///< the ROS 2 name as configured: "imu", "/mocap/robot1/pose"
-  std::string dds_topic;  ///< resolved as ROS 2 does: "rt/<namespace>/imu", "rt/mocap/robot1/pose"
-  double rate_hz = 100.0;        ///< the rate the driver publishes at
+  std::string topic;       ///< the ROS 2 name as configured: "imu", "/mocap/robot1/pose"
+  std::string dds_topic;   ///< resolved as ROS 2 does: "rt/<namespace>/imu", "rt/mocap/robot1/pose"
+  double rate_hz = 100.0;  ///< the rate the driver publishes at
   double max_age_s = 0.05;       ///< newest sample older than this: stale (default 5 periods)
   double startup_grace_s = 2.0;  ///< no sample within this of the loop's start: stale
 };

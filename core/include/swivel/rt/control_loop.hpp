@@ -429,7 +429,7 @@ class ControlLoop {
   bool stopping_ = false;         // the controlled stop was taken
   double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
-  GyroSample external_gyro_{};       // newest finite external gyro sample
+  GyroSample external_gyro_{};    // newest finite external gyro sample
   bool has_external_gyro_ = false;
   SensorWatch gyro_watch_;
   SensorWatch motion_capture_watch_;
