@@ -73,6 +73,8 @@ class LiveDaemon {
   }
   LiveDaemon(const LiveDaemon&) = delete;
   LiveDaemon& operator=(const LiveDaemon&) = delete;
+  LiveDaemon(LiveDaemon&&) = delete;
+  LiveDaemon& operator=(LiveDaemon&&) = delete;
 
   swivel::test::FakeHardware hardware;
   swivel::test::FakeDrivetrain drivetrain;
@@ -141,9 +143,10 @@ class ImuPublisher {
     writer_ = dds_create_writer(client.handle(), t, qos.get(), nullptr);
   }
   [[nodiscard]] bool matched() const { return publication_matched(writer_); }
-  void write(double wx, double wy, double wz) {
+  void write(double wx, double wy, double wz) const {
+    std::string frame = "imu_link";
     sensor_msgs_msg_dds__Imu_ m{};
-    m.header.frame_id = const_cast<char*>("imu_link");
+    m.header.frame_id = frame.data();
     m.orientation.w = 1.0;
     m.orientation_covariance[0] = -1.0;  // no orientation, as many gyro-only drivers send
     m.angular_velocity = {wx, wy, wz};
@@ -203,7 +206,9 @@ TEST(SensorInputsDds, RotatedMountingGivesTheBodyYawRateFromAReliablePublisher) 
   // Mounted upside down and turned by 90 degrees about z; pitched a little: the body's yaw
   // rate is the z row of R = Rz(pi/2) Ry(0.2) Rx(pi) applied to the IMU's rate.
   const double pitch = 0.2;
-  const double wx = 0.1, wy = -0.05, wz = 0.4;
+  const double wx = 0.1;
+  const double wy = -0.05;
+  const double wz = 0.4;
   const double expected = -std::sin(pitch) * wx +
                           std::cos(pitch) * std::sin(std::numbers::pi) * wy +
                           std::cos(pitch) * std::cos(std::numbers::pi) * wz;
@@ -267,8 +272,9 @@ TEST(SensorInputsDds, PoseStampedMotionCaptureReachesTheLocalization) {
   ASSERT_TRUE(wait_for([&] { return publication_matched(writer); }));
 
   const auto write = [&](double x_m, double qz, double qw) {
+    std::string frame = "world";
     geometry_msgs_msg_dds__PoseStamped_ m{};
-    m.header.frame_id = const_cast<char*>("world");
+    m.header.frame_id = frame.data();
     m.pose.position = {x_m, -1.0, 0.2};
     m.pose.orientation = {0.0, 0.0, qz, qw};
     ASSERT_EQ(dds_write(writer, &m), DDS_RETCODE_OK);
@@ -279,7 +285,10 @@ TEST(SensorInputsDds, PoseStampedMotionCaptureReachesTheLocalization) {
       << "the non-rotation was not counted";
   EXPECT_NE(daemon.localization.last_motion_capture_x_m.load(), 99.0);
 
-  double qx = 0, qy = 0, qz = 0, qw = 0;
+  double qx = 0.0;
+  double qy = 0.0;
+  double qz = 0.0;
+  double qw = 0.0;
   yaw_to_quaternion(0.5, qx, qy, qz, qw);
   ASSERT_TRUE(wait_for([&] {
     write(2.75, qz, qw);

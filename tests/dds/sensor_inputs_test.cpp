@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -46,7 +47,7 @@ TEST(ImuMounting, UpsideDownAndPitchedMountings) {
 }
 
 TEST(ImuMounting, MatchesTheFullRotationForArbitraryMountings) {
-  const double angles[] = {-2.9, -1.3, -0.4, 0.0, 0.25, 1.1, 2.2, 3.1};
+  const std::array<double, 8> angles{-2.9, -1.3, -0.4, 0.0, 0.25, 1.1, 2.2, 3.1};
   const Eigen::Vector3d w(0.31, -0.77, 1.9);
   for (const double roll : angles) {
     for (const double pitch : angles) {
@@ -62,7 +63,10 @@ TEST(ImuMounting, MatchesTheFullRotationForArbitraryMountings) {
 
 TEST(PoseToMotionCapture, TakesTheYawOfTheQuaternionAndTheReceptionStamp) {
   MotionCaptureSample m;
-  double qx = 0, qy = 0, qz = 0, qw = 0;
+  double qx = 0.0;
+  double qy = 0.0;
+  double qz = 0.0;
+  double qw = 0.0;
   yaw_to_quaternion(0.7, qx, qy, qz, qw);
   ASSERT_TRUE(pose_to_motion_capture(1.5, -2.0, qx, qy, qz, qw, 42.5, m));
   EXPECT_TRUE(m.valid);

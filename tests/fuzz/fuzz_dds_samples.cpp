@@ -88,9 +88,11 @@ void convert(int topic, const void* sample) {
       const auto& q = m.pose.orientation;
       swivel::MotionCaptureSample s;
       if (!swivel::dds::pose_to_motion_capture(p.x, p.y, q.x, q.y, q.z, q.w, 1.0, s)) break;
-      if (!s.valid || std::memcmp(&s.pose.x_m, &p.x, sizeof p.x) != 0 ||
-          std::memcmp(&s.pose.y_m, &p.y, sizeof p.y) != 0 || !std::isfinite(s.pose.x_m) ||
-          !std::isfinite(s.pose.y_m) || !(std::abs(s.pose.yaw_rad) <= M_PI)) {
+      // Bit-exact: the position passes through unchanged.
+      const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+      if (!s.valid || bits(s.pose.x_m) != bits(p.x) || bits(s.pose.y_m) != bits(p.y) ||
+          !std::isfinite(s.pose.x_m) || !std::isfinite(s.pose.y_m) ||
+          !(std::abs(s.pose.yaw_rad) <= M_PI)) {
         swivel::fuzz::contract_broken(kTarget, "accepted pose not finite or yaw out of range");
       }
       break;

@@ -155,7 +155,8 @@ TEST(SwiveldRos2, GyroFromARos2ImuAndItsSilenceStopsTheRobot) {
       dds_create_writer(client.handle(), imu_topic, sensor_data.get(), nullptr);
 
   double gyro_wz_radps = 0.0;
-  std::string fault, detail;
+  std::string fault;
+  std::string detail;
   int mode = -1;
   const auto take_states = [&] {
     take_all<swivel_msg_RobotState>(states, [&](const swivel_msg_RobotState& m) {
@@ -168,8 +169,9 @@ TEST(SwiveldRos2, GyroFromARos2ImuAndItsSilenceStopsTheRobot) {
   };
   auto deadline = std::chrono::steady_clock::now() + Seconds(20);
   while (std::chrono::steady_clock::now() < deadline && std::abs(gyro_wz_radps - 0.1) > 1e-9) {
+    std::string frame = "imu_link";
     sensor_msgs_msg_dds__Imu_ m{};
-    m.header.frame_id = const_cast<char*>("imu_link");
+    m.header.frame_id = frame.data();
     m.orientation.w = 1.0;
     m.angular_velocity = {0.0, 0.0, -0.1};
     ASSERT_EQ(dds_write(imu, &m), DDS_RETCODE_OK);
@@ -189,8 +191,9 @@ TEST(SwiveldRos2, GyroFromARos2ImuAndItsSilenceStopsTheRobot) {
   long imu_samples = -1;
   deadline = std::chrono::steady_clock::now() + Seconds(10);
   while (std::chrono::steady_clock::now() < deadline && imu_samples <= 0) {
+    std::string frame = "imu_link";
     sensor_msgs_msg_dds__Imu_ m{};
-    m.header.frame_id = const_cast<char*>("imu_link");
+    m.header.frame_id = frame.data();
     m.orientation.w = 1.0;
     m.angular_velocity = {0.0, 0.0, -0.1};
     ASSERT_EQ(dds_write(imu, &m), DDS_RETCODE_OK);

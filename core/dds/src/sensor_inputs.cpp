@@ -67,9 +67,8 @@ rt::ExternalSensorOptions loop_sensor_options(const Ros2Options& ros2) {
   return options;
 }
 
-SensorInputs::SensorInputs(dds_entity_t participant, const Ros2Options& ros2,
-                           SensorCallbacks callbacks)
-    : ros2_(ros2), callbacks_(std::move(callbacks)) {
+SensorInputs::SensorInputs(dds_entity_t participant, Ros2Options ros2, SensorCallbacks callbacks)
+    : ros2_(std::move(ros2)), callbacks_(std::move(callbacks)) {
   const auto& rpy = ros2_.imu.rotation_rpy_rad;
   mounting_ = ImuMounting::from_rpy(rpy[0], rpy[1], rpy[2]);
   // Best effort matches best-effort and reliable writers alike; a sensor stream wants the

@@ -73,9 +73,13 @@ class SensorInputs {
  public:
   /// Creates a reader per configured topic on `participant`; none when nothing is
   /// configured. @throws DdsError
-  SensorInputs(dds_entity_t participant, const Ros2Options& ros2, SensorCallbacks callbacks);
+  SensorInputs(dds_entity_t participant, Ros2Options ros2, SensorCallbacks callbacks);
+  /// The readers go with the participant (deleted with it).
+  ~SensorInputs() = default;
   SensorInputs(const SensorInputs&) = delete;
   SensorInputs& operator=(const SensorInputs&) = delete;
+  SensorInputs(SensorInputs&&) = delete;
+  SensorInputs& operator=(SensorInputs&&) = delete;
 
   /// The readers (0 when not configured), for the subscriber's waitset.
   [[nodiscard]] std::array<dds_entity_t, 2> readers() const noexcept {
