@@ -59,6 +59,8 @@ struct RigOptions {
   double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
   /// The published twist's window (the loop's default unless a test says).
   double twist_window_s = rt::LoopOptions{}.twist_window_s;
+  /// External gyro and motion-capture sources (none unless a test says).
+  rt::ExternalSensorOptions external_sensors;
 };
 
 inline PluginContext plugin_context(const std::string& params_yaml, const std::string& path,
@@ -96,6 +98,7 @@ class FaultRig {
     loop_options.limits = options.limits;
     loop_options.stop_linear_deceleration_mps2 = options.stop_linear_deceleration_mps2;
     loop_options.twist_window_s = options.twist_window_s;
+    loop_options.external_sensors = options.external_sensors;
     rt::set_encoder_resolutions(robot, loop_options);  // as the daemon does
     loop = std::make_unique<rt::ControlLoop>(loop_options, *hardware, *drivetrain, *localization,
                                              options.localization.c_str());

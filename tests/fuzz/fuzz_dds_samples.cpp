@@ -2,8 +2,9 @@
 // CDR validation (dds_stream_normalize_data) and deserialisation (dds_stream_read) with the
 // descriptors idlc generates from core/idl/, then the conversion into the loop's types.
 //
-// Input: one byte choosing the topic (VelocityCommand, MotionCapture, ROS 2 Twist), the
-// 4-byte encapsulation header of the RTPS payload, then the CDR body.
+// Input: one byte choosing the topic (VelocityCommand, MotionCapture, ROS 2 Twist, ROS 2 Imu,
+// ROS 2 PoseStamped), the 4-byte encapsulation header of the RTPS payload, then the CDR body.
+// The ROS 2 sensor samples go through the bridge's own conversions (swivel/dds/sensor_inputs.hpp).
 //
 // The conversion below mirrors DdsBridge::take_commands/take_motion_capture, which have no
 // function of their own yet; once core/dds exposes one, call it here instead.
@@ -22,6 +23,7 @@
 #include "fuzz_support.hpp"
 #include "ros2_interfaces.h"
 #include "swivel.h"
+#include "swivel/dds/sensor_inputs.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/types.hpp"
 
@@ -66,6 +68,35 @@ void convert(int topic, const void* sample) {
       }
       break;
     }
+    case 3: {
+      // An upside-down, pitched and turned mounting: every IMU axis contributes.
+      const auto& m = *static_cast<const sensor_msgs_msg_dds__Imu_*>(sample);
+      const auto& w = m.angular_velocity;
+      const double wz =
+          swivel::dds::ImuMounting::from_rpy(3.0, 0.4, 1.0).yaw_rate_radps(w.x, w.y, w.z);
+      const double bound = std::abs(w.x) + std::abs(w.y) + std::abs(w.z);
+      // A rotation does not lengthen a vector: finite in, finite and no larger out (inputs
+      // whose sum of magnitudes overflows excepted).
+      if (std::isfinite(bound) && !(std::abs(wz) <= bound * (1.0 + 1e-12))) {
+        swivel::fuzz::contract_broken(kTarget, "IMU yaw rate not bounded by the input rate");
+      }
+      break;
+    }
+    case 4: {
+      const auto& m = *static_cast<const geometry_msgs_msg_dds__PoseStamped_*>(sample);
+      const auto& p = m.pose.position;
+      const auto& q = m.pose.orientation;
+      swivel::MotionCaptureSample s;
+      if (!swivel::dds::pose_to_motion_capture(p.x, p.y, q.x, q.y, q.z, q.w, 1.0, s)) break;
+      // Bit-exact: the position passes through unchanged.
+      const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+      if (!s.valid || bits(s.pose.x_m) != bits(p.x) || bits(s.pose.y_m) != bits(p.y) ||
+          !std::isfinite(s.pose.x_m) || !std::isfinite(s.pose.y_m) ||
+          !(std::abs(s.pose.yaw_rad) <= M_PI)) {
+        swivel::fuzz::contract_broken(kTarget, "accepted pose not finite or yaw out of range");
+      }
+      break;
+    }
     default: {
       const auto& t = *static_cast<const geometry_msgs_msg_dds__Twist_*>(sample);
       swivel::VelocityCommand command;
@@ -80,10 +111,11 @@ void convert(int topic, const void* sample) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 5) return 0;
-  const dds_topic_descriptor_t* descriptors[] = {&swivel_msg_VelocityCommand_desc,
-                                                 &swivel_msg_MotionCapture_desc,
-                                                 &geometry_msgs_msg_dds__Twist__desc};
-  const int topic = data[0] % 3;
+  const dds_topic_descriptor_t* descriptors[] = {
+      &swivel_msg_VelocityCommand_desc, &swivel_msg_MotionCapture_desc,
+      &geometry_msgs_msg_dds__Twist__desc, &sensor_msgs_msg_dds__Imu__desc,
+      &geometry_msgs_msg_dds__PoseStamped__desc};
+  const int topic = data[0] % 5;
   const dds_topic_descriptor_t& desc = *descriptors[topic];
   const auto encapsulation = static_cast<std::uint16_t>((data[1] << 8) | data[2]);
   bool swap = false;

@@ -134,4 +134,28 @@ TEST(Swiveld, CheckValidatesTheDefaultConfigurationAndExits) {
       << daemon.out();
 }
 
+TEST(Swiveld, CheckValidatesTheDynamixelImuExample) {
+  // The shipped example of joints from dynamixel and the gyro from a ROS 2 IMU: valid
+  // without the servos (the port is opened only at activation).
+  Process daemon({"--config", source_dir() + "/config/swiveld_dynamixel_imu.yaml", "--check"});
+  const auto status = daemon.wait_for(std::chrono::seconds(10));
+  ASSERT_TRUE(status && WIFEXITED(*status));
+  EXPECT_EQ(WEXITSTATUS(*status), 0) << daemon.err();
+  EXPECT_NE(daemon.out().find("configuration valid (robot docent, hardware dynamixel, drivetrain "
+                              "differential, localization raw_eg)"),
+            std::string::npos)
+      << daemon.out();
+
+  // Without the bridge the IMU could never arrive: refused up front.
+  Process no_dds(
+      {"--config", source_dir() + "/config/swiveld_dynamixel_imu.yaml", "--check", "--no-dds"});
+  const auto refused = no_dds.wait_for(std::chrono::seconds(10));
+  ASSERT_TRUE(refused && WIFEXITED(*refused));
+  EXPECT_EQ(WEXITSTATUS(*refused), 1);
+  EXPECT_NE(no_dds.err().find("swiveld_dynamixel_imu.yaml: dds.ros2.imu: a ROS 2 sensor topic "
+                              "needs the DDS bridge, but --no-dds was given"),
+            std::string::npos)
+      << no_dds.err();
+}
+
 }  // namespace

@@ -1,6 +1,8 @@
 // Proves the loop's real-time rule "no heap operation on the loop thread" (STYLE.md): many
-// cycles with a localization hot swap, faults and a command timeout in them, counted by the
-// allocation guard armed on the loop's thread only. The negative tests prove the guard
+// cycles with a localization hot swap, faults and a command timeout in them (and, with
+// external sensors configured, the gyro and motion-capture rings drained every cycle, their
+// staleness checked, a stale gyro and its clear), counted by the allocation guard armed on
+// the loop's thread only. The negative tests prove the guard
 // would notice.
 
 #include "alloc_guard.hpp"
@@ -15,6 +17,7 @@
 
 #include "fake_plugins.hpp"
 #include "swivel/rt/control_loop.hpp"
+#include "swivel/rt/rt_log.hpp"  // copy_text
 
 namespace swivel::rt {
 namespace {
@@ -41,10 +44,29 @@ struct Outcome {
 };
 
 // Runs the scenario on a dedicated thread, as the loop thread would, and arms the guard there.
-Outcome run_scenario(FakeLocalization& first, FakeLocalization& second, FakeHardware& hardware) {
+// With `external_sensors`, the sources are configured and fed: a gyro sample every 5 cycles
+// (missing for 200 cycles from kGyroGapCycle: a stale fault, cleared at kGyroClearCycle) and
+// a motion-capture pose every 10.
+constexpr int kGyroGapCycle = 10000;
+constexpr int kGyroClearCycle = 10300;
+
+Outcome run_scenario(FakeLocalization& first, FakeLocalization& second, FakeHardware& hardware,
+                     bool external_sensors = false) {
   FakeDrivetrain drivetrain;
   LoopOptions options;
   options.realtime = false;
+  if (external_sensors) {
+    for (SensorWatchOptions* w :
+         {&options.external_sensors.gyro, &options.external_sensors.motion_capture}) {
+      w->enabled = true;
+      w->max_age_s = 0.05;
+      w->startup_grace_s = 1.0;
+      copy_text("rt/sensor: stale", w->stale_detail);
+      copy_text("rt/sensor: silent", w->silent_detail);
+    }
+    // The gyro fed here is not the fake robot's turn rate.
+    options.odometry_check.enabled = false;
+  }
   // The twist window's fit and its covariance (a forward call per channel) run every cycle.
   options.wheel_encoder_resolution_rad = 2.0 * M_PI / 4096;
   options.steer_encoder_resolution_rad = 2.0 * M_PI / 4096;
@@ -78,6 +100,18 @@ Outcome run_scenario(FakeLocalization& first, FakeLocalization& second, FakeHard
         c.received_s = now_s;
         c.sequence = ++sequence;
         loop.push_command(c);
+      }
+      if (external_sensors) {
+        const bool gyro_gap = i >= kGyroGapCycle && i < kGyroGapCycle + 200;
+        if (i % 5 == 0 && !gyro_gap) (void)loop.push_gyro({now_s, 0.1});
+        if (i % 10 == 0) {
+          MotionCaptureSample m;
+          m.valid = true;
+          m.stamp_s = now_s;
+          m.pose = {0.01 * i, 0.0, 0.0};
+          (void)loop.push_motion_capture(m, MotionCaptureSource::kWatched);
+        }
+        if (i == kGyroClearCycle) loop.clear_fault();
       }
       loop.run_cycle(now_s);
     };
@@ -128,6 +162,23 @@ TEST(LoopAllocations, NoHeapOperationsOnTheLoopThreadAcrossASwap) {
             static_cast<std::uint64_t>((kWarmUpCycles + kArmedCycles) / 10));
   EXPECT_EQ(outcome.run_samples_dropped == 0, outcome.run_sample_gaps == 0);
   EXPECT_GT(outcome.run_samples, 0U);
+}
+
+TEST(LoopAllocations, NoHeapOperationsWithExternalSensorsConfigured) {
+  FakeHardware hardware;
+  FakeLocalization first;
+  FakeLocalization second;
+  const Outcome outcome = run_scenario(first, second, hardware, true);
+
+  EXPECT_EQ(outcome.counts.allocations, 0U)
+      << "first allocation: " << outcome.counts.first_allocation_bytes << " bytes";
+  EXPECT_EQ(outcome.counts.deallocations, 0U);
+  EXPECT_EQ(outcome.last.cycle, static_cast<std::uint64_t>(kWarmUpCycles + kArmedCycles));
+  // The sensor fault, the command timeout and the stale gyro, each cleared.
+  EXPECT_EQ(outcome.last.fault_count, 3U);
+  EXPECT_EQ(outcome.last.mode, LoopMode::kVelocity);
+  EXPECT_EQ(outcome.last.gyro_wz_radps, 0.1);  // the external gyro, not the fake's
+  EXPECT_GT(second.last_motion_capture_x_m.load(), 100.0);
 }
 
 TEST(LoopAllocations, GuardCatchesAPluginThatAllocates) {

@@ -22,6 +22,7 @@
 #include "swivel/clock.hpp"
 #include "swivel/dds/topics.hpp"
 #include "swivel/rt/clock_offset.hpp"
+#include "take_all.hpp"
 
 namespace swivel::dds {
 
@@ -58,25 +59,6 @@ void borrow(Sequence& sequence, Element* elements, std::uint32_t length) {
   sequence._length = length;
   sequence._buffer = elements;
   sequence._release = false;
-}
-
-constexpr std::uint32_t kTakeBatch = 16;
-
-// Takes every available sample of `reader` and calls `fn(sample, info)` for the valid ones.
-template <typename Sample, typename Fn>
-void take_all(dds_entity_t reader, Fn&& fn) {
-  std::array<void*, kTakeBatch> samples{};
-  std::array<dds_sample_info_t, kTakeBatch> infos{};
-  for (;;) {
-    samples[0] = nullptr;  // ask Cyclone to loan the samples
-    const dds_return_t n = dds_take(reader, samples.data(), infos.data(), kTakeBatch, kTakeBatch);
-    if (n <= 0) return;
-    for (dds_return_t i = 0; i < n; ++i) {
-      if (infos[i].valid_data) fn(*static_cast<const Sample*>(samples[i]));
-    }
-    dds_return_loan(reader, samples.data(), n);
-    if (n < static_cast<dds_return_t>(kTakeBatch)) return;
-  }
 }
 
 }  // namespace
@@ -118,6 +100,7 @@ struct DdsBridge::Entities {
   dds_entity_t set_pose_reader = 0;
   dds_entity_t cmd_vel_reader = 0;      ///< ROS 2, 0 when disabled
   dds_entity_t initialpose_reader = 0;  ///< ROS 2, 0 when disabled
+  std::unique_ptr<SensorInputs> sensors;  ///< ROS 2 sensor topics, null when disabled
   dds_entity_t waitset = 0;
 
   std::mutex wake_mutex;
@@ -193,12 +176,15 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
     dds_->initialpose_reader =
         reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
                options_.ros2.initialpose_topic(), reader_qos.get());
+    dds_->sensors = std::make_unique<SensorInputs>(
+        pp, options_.ros2, SensorCallbacks{callbacks_.on_gyro, callbacks_.on_pose_motion_capture});
   }
 
   dds_->waitset = check(dds_create_waitset(pp), "dds_create_waitset");
-  for (const dds_entity_t r :
-       {dds_->command_reader, dds_->motion_capture_reader, dds_->request_reader,
-        dds_->set_pose_reader, dds_->cmd_vel_reader, dds_->initialpose_reader}) {
+  const auto sensors = dds_->sensors ? dds_->sensors->readers() : std::array<dds_entity_t, 2>{};
+  for (const dds_entity_t r : {dds_->command_reader, dds_->motion_capture_reader,
+                               dds_->request_reader, dds_->set_pose_reader, dds_->cmd_vel_reader,
+                               dds_->initialpose_reader, sensors[0], sensors[1]}) {
     if (r == 0) continue;
     const dds_entity_t condition =
         check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
@@ -241,6 +227,7 @@ BridgeCounters DdsBridge::counters() const {
   c.motion_captures_received = motion_captures_received_.load();
   c.requests_received = requests_received_.load();
   c.replies_published = replies_published_.load();
+  if (dds_->sensors) c.sensors = dds_->sensors->counters();
   return c;
 }
 
@@ -542,7 +529,7 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
                      : d.mode == LoopMode::kVelocity    ? "velocity"
                      : d.mode == LoopMode::kCalibration ? "calibration"
                                                         : "safe_stop";
-  const std::vector<std::pair<std::string, std::string>> values{
+  std::vector<std::pair<std::string, std::string>> values{
       {"mode", mode},
       {"fault", fault_code_name(d.fault)},
       {"fault_detail", d.fault_detail},
@@ -565,6 +552,21 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
       {"reload_count", std::to_string(d.reload_count)},
       {"last_reload", d.last_reload_result},
       {"restart_required", d.restart_required ? "true" : "false"}};
+  if (dds_->sensors) {
+    // The ROS 2 sensor topics' samples: a driver whose samples are all rejected shows here
+    // before its silence stops the robot.
+    const SensorCounters sensors = dds_->sensors->counters();
+    if (options_.ros2.imu.enabled) {
+      values.emplace_back("imu_samples", std::to_string(sensors.imu_received));
+      values.emplace_back("imu_samples_rejected", std::to_string(sensors.imu_rejected));
+    }
+    if (options_.ros2.mocap_pose.enabled) {
+      values.emplace_back("mocap_pose_samples", std::to_string(sensors.mocap_poses_received));
+      values.emplace_back("mocap_pose_samples_rejected",
+                          std::to_string(sensors.mocap_poses_rejected));
+    }
+    values.emplace_back("sensor_samples_dropped", std::to_string(sensors.dropped));
+  }
   std::vector<diagnostic_msgs_msg_dds__KeyValue_> pairs(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
     pairs[i].key = c_str(values[i].first);
@@ -646,6 +648,7 @@ void DdsBridge::subscribe_loop(const std::stop_token& stop) {
       take_requests();
       take_set_poses();
       take_ros2_initialposes();
+      if (dds_->sensors) dds_->sensors->take();
     } catch (const std::exception& e) {
       spdlog::warn("dds: command handling failed: {}", e.what());
     }

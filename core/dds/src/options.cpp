@@ -1,5 +1,6 @@
 #include "swivel/dds/options.hpp"
 
+#include <cmath>
 #include <filesystem>
 
 #include "swivel/config/config_error.hpp"
@@ -31,6 +32,53 @@ bool valid_ros_name(const std::string& name) {
     token_start = false;
   }
   return name.empty() || !token_start;
+}
+
+// A sensor topic's ROS 2 name, resolved the way ROS 2 does: a relative name under the
+// namespace, an absolute one ("/imu") as it is.
+std::string resolve_topic(ParamReader& reader, const std::string& ros_namespace,
+                          const std::string& name) {
+  const bool absolute = !name.empty() && name.front() == '/';
+  const std::string bare = absolute ? name.substr(1) : name;
+  if (bare.empty() || !valid_ros_name(bare)) {
+    reader.fail("topic",
+                "expected a ROS 2 topic name (letters, digits, '_', '/'; '/' first for "
+                "an absolute one), got '" +
+                    name + "'");
+  }
+  return absolute ? "rt/" + bare : ros2_topic(ros_namespace, bare.c_str());
+}
+
+void parse_sensor_topic(ParamReader& reader, const std::string& ros_namespace,
+                        const char* default_topic, Ros2SensorTopic& out) {
+  out.enabled = true;
+  out.topic =
+      default_topic != nullptr ? reader.string_or("topic", default_topic) : reader.string("topic");
+  out.dds_topic = resolve_topic(reader, ros_namespace, out.topic);
+  out.rate_hz = reader.number_or("rate_hz", 100.0, 0.1, 10000.0);
+  out.max_age_s = reader.number_or("max_age_s", kDefaultMaxAgePeriods / out.rate_hz, 0.001, 60.0);
+  out.startup_grace_s = reader.number_or("startup_grace_s", 2.0, 0.0, 600.0);
+}
+
+void parse_rotation(ParamReader& reader, std::array<double, 3>& rpy_rad) {
+  const YAML::Node list = reader.sequence("rotation_rpy_rad");
+  if (list.size() == 0) return;  // absent: the IMU frame is the body frame
+  const auto wrong = [&](const std::string& got) {
+    reader.fail("rotation_rpy_rad",
+                "expected three finite angles [roll, pitch, yaw] in rad, got " + got);
+  };
+  if (list.size() != 3) wrong(std::to_string(list.size()) + " entries");
+  for (std::size_t i = 0; i < 3; ++i) {
+    double v = 0.0;
+    try {
+      v = list[i].as<double>();
+    } catch (const YAML::Exception&) {
+      wrong("'" + (list[i].IsScalar() ? list[i].Scalar() : std::string("a non-number")) +
+            "' at index " + std::to_string(i));
+    }
+    if (!std::isfinite(v)) wrong("a non-finite value at index " + std::to_string(i));
+    rpy_rad[i] = v;
+  }
 }
 
 }  // namespace
@@ -107,6 +155,27 @@ DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
   };
   names("wheel_joints", options.ros2.wheel_joints);
   names("steering_joints", options.ros2.steering_joints);
+  for (const char* key : {"imu", "mocap_pose"}) {
+    if (ros2.has(key) && !options.ros2.enabled) {
+      ros2.fail(key, "a ROS 2 sensor topic needs dds.ros2.enabled: true");
+    }
+  }
+  if (ros2.has("imu")) {
+    ParamReader imu = ros2.child("imu");
+    parse_sensor_topic(imu, ros_namespace, "imu", options.ros2.imu);
+    parse_rotation(imu, options.ros2.imu.rotation_rpy_rad);
+    imu.finish();
+  }
+  if (ros2.has("mocap_pose")) {
+    ParamReader pose = ros2.child("mocap_pose");
+    parse_sensor_topic(pose, ros_namespace, nullptr, options.ros2.mocap_pose);
+    pose.finish();
+  }
+  if (options.ros2.imu.enabled && options.ros2.mocap_pose.enabled &&
+      options.ros2.imu.dds_topic == options.ros2.mocap_pose.dds_topic) {
+    ros2.fail("mocap_pose", "topic '" + options.ros2.mocap_pose.dds_topic +
+                                "' is the IMU's as well: give each sensor its own topic");
+  }
   ros2.finish();
   reader.finish();
   return options;

@@ -64,6 +64,12 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
         "{}: dds.run_samples_rate_hz: expected at most loop.rate_hz ({:g} Hz), got {:g}",
         config_.file, config_.rate_hz, dds_options_.run_samples_rate_hz));
   }
+  // A configured sensor without the bridge would only ever be stale.
+  if (!options_.dds && (dds_options_.ros2.imu.enabled || dds_options_.ros2.mocap_pose.enabled)) {
+    throw ConfigError(config_.file + ": dds.ros2." +
+                      (dds_options_.ros2.imu.enabled ? "imu" : "mocap_pose") +
+                      ": a ROS 2 sensor topic needs the DDS bridge, but --no-dds was given");
+  }
   robot_model_text_ = read_text(config_.robot_model_path);
   status_period_s_ = config_.status_period_s;
   PluginSet plugins = assemble_plugins(loader_, config_);
@@ -109,6 +115,7 @@ void Daemon::start() {
   // Run samples only for the DDS topic that carries them.
   loop_options.run_sample_rate_hz = options_.dds ? dds_options_.run_samples_rate_hz : 0.0;
   rt::set_encoder_resolutions(config_.robot, loop_options);
+  loop_options.external_sensors = dds::loop_sensor_options(dds_options_.ros2);
   loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
                                             localization_->active(),
                                             config_.localization.plugin.c_str());
@@ -175,9 +182,15 @@ void Daemon::start_bridge() {
   } else {
     spdlog::info("DDS velocity commands are ignored: command.source is 'script'");
   }
+  // Both motion-capture topics and the IMU are taken on the bridge's subscriber thread: the
+  // rings' single producer.
   callbacks.on_motion_capture = [this](const MotionCaptureSample& m) {
     return loop_->push_motion_capture(m);
   };
+  callbacks.on_pose_motion_capture = [this](const MotionCaptureSample& m) {
+    return loop_->push_motion_capture(m, rt::MotionCaptureSource::kWatched);
+  };
+  callbacks.on_gyro = [this](const rt::GyroSample& g) { return loop_->push_gyro(g); };
   callbacks.read_diagnostics = [this] { return diagnostics_->read(); };
   // Answered on the main thread, one at a time, in the order they came.
   const auto queue = [this](RequestQueue::Request request) {
@@ -209,6 +222,21 @@ void Daemon::start_bridge() {
                          ", " + dds_options_.ros2.joint_states_topic() + ", " +
                          dds_options_.ros2.diagnostics_topic()
                    : std::string());
+  const auto& imu = dds_options_.ros2.imu;
+  if (imu.enabled) {
+    spdlog::info(
+        "gyro from {} (sensor_msgs/Imu, mounting rpy [{}, {}, {}] rad), stale after "
+        "{} s, {} s start-up grace",
+        imu.dds_topic, imu.rotation_rpy_rad[0], imu.rotation_rpy_rad[1], imu.rotation_rpy_rad[2],
+        imu.max_age_s, imu.startup_grace_s);
+  }
+  const auto& pose = dds_options_.ros2.mocap_pose;
+  if (pose.enabled) {
+    spdlog::info(
+        "motion capture from {} (geometry_msgs/PoseStamped), stale after {} s, {} s "
+        "start-up grace",
+        pose.dds_topic, pose.max_age_s, pose.startup_grace_s);
+  }
 }
 
 dds::ReplySample Daemon::handle_request(const dds::RequestSample& request) {

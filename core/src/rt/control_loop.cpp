@@ -142,7 +142,9 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       odometry_monitor_(options.odometry_check),
       twist_window_(twist_window_options(options)),
       command_limiter_(options.limits),
-      stop_limiter_(stop_limits(options)) {
+      stop_limiter_(stop_limits(options)),
+      gyro_watch_(options.external_sensors.gyro),
+      motion_capture_watch_(options.external_sensors.motion_capture) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
     throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
                                 std::to_string(options.rate_hz));
@@ -154,6 +156,11 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   if (!std::isfinite(options.clock_offset_refresh_s) || !(options.clock_offset_refresh_s > 0.0)) {
     throw std::invalid_argument("clock_offset_refresh_s must be finite and positive, got " +
                                 std::to_string(options.clock_offset_refresh_s));
+  }
+  for (const std::string& problem :
+       {validate(options.external_sensors.gyro, "external gyro"),
+        validate(options.external_sensors.motion_capture, "external motion capture")}) {
+    if (!problem.empty()) throw std::invalid_argument(problem);
   }
   if (!OdometryMonitor::valid(options.odometry_check)) {
     throw std::invalid_argument(
@@ -266,9 +273,12 @@ bool ControlLoop::push_command(const VelocityCommand& command) noexcept {
   return true;
 }
 
-bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample) noexcept {
-  return motion_capture_.try_push(sample);
+bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample,
+                                      MotionCaptureSource source) noexcept {
+  return motion_capture_.try_push({sample, source});
 }
+
+bool ControlLoop::push_gyro(const GyroSample& sample) noexcept { return gyro_.try_push(sample); }
 
 bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
   if (next == nullptr) return false;
@@ -411,6 +421,58 @@ void ControlLoop::check_odometry(const OdometryIncrement& odometry, double now_s
                   "drivetrain odometry residual above its limit",
                   odometry_monitor_.residual_mps(), odometry_monitor_.options().residual_limit_mps);
       return;
+  }
+}
+
+// The newest external gyro sample: at most one ring's worth per cycle, so that a source
+// pushing as fast as the loop drains cannot hold the cycle.
+void ControlLoop::take_external_gyro(double now_s) noexcept {
+  GyroSample sample;
+  pop_at_most(gyro_, sample, kGyroDrainLimit, [&](const GyroSample& g) {
+    if (finite(g.received_s) && finite(g.wz_radps)) {
+      external_gyro_ = g;
+      has_external_gyro_ = true;
+      gyro_watch_.observe(g.received_s);
+    } else {
+      log_event(LogLevel::kWarn, LogCode::kMessage, now_s,
+                "non-finite external gyro sample dropped", g.received_s, g.wz_radps);
+    }
+  });
+}
+
+// The newest motion-capture sample from outside the hardware (the Swivel topic, the watched
+// source), bounded like the gyro's; it fills in when the hardware reading carries none.
+void ControlLoop::take_motion_capture(double now_s, bool reading_ok) noexcept {
+  MotionCaptureInput input;
+  MotionCaptureSample newest;
+  pop_at_most(motion_capture_, input, kMotionCaptureDrainLimit, [&](const MotionCaptureInput& in) {
+    const MotionCaptureSample& m = in.sample;
+    if (!m.valid) return;
+    if (finite(m)) {
+      newest = m;
+      if (in.source == MotionCaptureSource::kWatched) {
+        motion_capture_watch_.observe(m.stamp_s);
+      }
+    } else {
+      log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
+                "non-finite motion-capture sample dropped", m.stamp_s);
+    }
+  });
+  if (reading_ok && newest.valid && !current_.motion_capture.valid) {
+    current_.motion_capture = newest;
+  }
+}
+
+// A configured source that went silent is a latched fault; it persists (and refuses a
+// clear) for as long as the source stays silent. The causes were written off the loop.
+void ControlLoop::check_external_sensors(double now_s) noexcept {
+  if (const char* stale = gyro_watch_.check(now_s)) {
+    raise_fault(FaultCode::kSensorStale, now_s, stale, gyro_watch_.age_s(now_s),
+                gyro_watch_.limit_s());
+  }
+  if (const char* stale = motion_capture_watch_.check(now_s)) {
+    raise_fault(FaultCode::kSensorStale, now_s, stale, motion_capture_watch_.age_s(now_s),
+                motion_capture_watch_.limit_s());
   }
 }
 
@@ -721,35 +783,29 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   bool reading_ok = false;
   const char* hardware_failure = nullptr;  // cause of a hardware fault in this cycle
   const char* thrown = nullptr;
+  take_external_gyro(now_s);
   if (guarded([&] { return hardware_.read(now_s, current_); }, thrown) != Status::kOk) {
     hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
     raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
   } else if (current_.module_count > kMaxModules) {
     hardware_failure = "module count out of range";
     raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
-  } else if (const char* field = non_finite_field(current_); field != nullptr) {
-    raise_fault(FaultCode::kNonFiniteSensor, now_s, field);
   } else {
-    reading_ok = true;
+    if (gyro_watch_.enabled()) {
+      // The configured external gyro replaces the hardware's; a stale one is no reading
+      // (the localization falls back as on a gyro dropout while the fault stops the robot).
+      const bool fresh = has_external_gyro_ && gyro_watch_.fresh(now_s);
+      current_.gyro_valid = fresh;
+      current_.gyro_wz_radps = fresh ? external_gyro_.wz_radps : 0.0;
+    }
+    if (const char* field = non_finite_field(current_); field != nullptr) {
+      raise_fault(FaultCode::kNonFiniteSensor, now_s, field);
+    } else {
+      reading_ok = true;
+    }
   }
-
-  // Newest motion-capture sample from the external source: at most one ring's worth per
-  // cycle, so that a source pushing as fast as the loop drains cannot hold the cycle.
-  MotionCaptureSample sample;
-  MotionCaptureSample newest_sample;
-  pop_at_most(motion_capture_, sample, kMotionCaptureDrainLimit,
-              [&](const MotionCaptureSample& m) {
-                if (!m.valid) return;
-                if (finite(m)) {
-                  newest_sample = m;
-                } else {
-                  log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
-                            "non-finite motion-capture sample dropped", m.stamp_s);
-                }
-              });
-  if (reading_ok && newest_sample.valid && !current_.motion_capture.valid) {
-    current_.motion_capture = newest_sample;
-  }
+  take_motion_capture(now_s, reading_ok);
+  check_external_sensors(now_s);
   if (reading_ok && current_.motion_capture.valid) run_sample_mocap_ = current_.motion_capture;
 
   // Odometry and localization. The twist window goes first: its forward kinematics calls

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "swivel/dds/options.hpp"
+#include "swivel/dds/sensor_inputs.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/types.hpp"
 
@@ -106,6 +107,12 @@ struct DdsCallbacks {
   std::function<bool(const VelocityCommand&)> on_command{};
   /// A motion-capture sample for this robot (stamp_s on the daemon's CLOCK_MONOTONIC).
   std::function<bool(const MotionCaptureSample&)> on_motion_capture{};
+  /// A body-frame gyro sample from the ROS 2 IMU topic (dds.ros2.imu), received_s on
+  /// CLOCK_MONOTONIC at reception.
+  std::function<bool(const rt::GyroSample&)> on_gyro{};
+  /// A motion-capture sample from the ROS 2 pose topic (dds.ros2.mocap_pose), stamp_s on
+  /// CLOCK_MONOTONIC at reception.
+  std::function<bool(const MotionCaptureSample&)> on_pose_motion_capture{};
   /// The loop's health; when empty, no Diagnostics are published.
   std::function<DiagnosticsSample()> read_diagnostics{};
   /// A request ("reload", ...) for this robot.
@@ -124,6 +131,7 @@ struct BridgeCounters {
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;   ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
+  SensorCounters sensors;  ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
 };
 
 class DdsBridge {

@@ -3,6 +3,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,6 +11,28 @@
 #include "swivel/robot_model.hpp"
 
 namespace swivel::dds {
+
+/// A ROS 2 sensor topic the daemon subscribes to (README "External sensors"): configured
+/// when its section is present; a source that goes silent stops the robot (fault
+/// sensor_stale).
+struct Ros2SensorTopic {
+  bool enabled = false;
+  std::string topic;       ///< the ROS 2 name as configured: "imu", "/mocap/robot1/pose"
+  std::string dds_topic;   ///< resolved as ROS 2 does: "rt/<namespace>/imu", "rt/mocap/robot1/pose"
+  double rate_hz = 100.0;  ///< the rate the driver publishes at
+  double max_age_s = 0.05;       ///< newest sample older than this: stale (default 5 periods)
+  double startup_grace_s = 2.0;  ///< no sample within this of the loop's start: stale
+};
+
+/// sensor_msgs/Imu as the gyro, mounted with a rotation from the IMU frame to the body
+/// frame given as fixed-axis roll, pitch, yaw (a URDF joint's rpy): R = Rz(yaw) Ry(pitch)
+/// Rx(roll).
+struct Ros2ImuOptions : Ros2SensorTopic {
+  std::array<double, 3> rotation_rpy_rad{};
+};
+
+/// Samples per expected period that make a source stale unless max_age_s is given.
+inline constexpr double kDefaultMaxAgePeriods = 5.0;
 
 /// ROS 2 compatibility (README "ROS 2 tools without a bridge"): odometry as
 /// nav_msgs/Odometry on rt/<namespace>/odom, the odom -> base transform on rt/tf, joint
@@ -37,6 +60,10 @@ struct Ros2Options {
   /// Not from YAML: each module's steering offset (robot model), added to the measured
   /// steering angle so that a steering joint's position is the true angle.
   std::vector<double> steering_offsets_rad;
+  /// dds.ros2.imu: the gyro from a ROS 2 IMU driver (sensor_msgs/Imu).
+  Ros2ImuOptions imu;
+  /// dds.ros2.mocap_pose: motion capture from a ROS 2 driver (geometry_msgs/PoseStamped).
+  Ros2SensorTopic mocap_pose;
 
   /// "rt/odom" or "rt/<namespace>/odom".
   [[nodiscard]] std::string odom_topic() const;

@@ -22,7 +22,11 @@
 //  - the newest velocity command older than command_timeout_s: mode kIdle with fault
 //    kCommandTimeout; a fresh valid command resumes;
 //  - a non-finite velocity command: rejected, mode kIdle with fault kNonFiniteCommand; a
-//    fresh valid command resumes.
+//    fresh valid command resumes;
+//  - a configured external source (LoopOptions::external_sensors: a DDS gyro, a DDS
+//    motion-capture topic) whose newest sample is older than its max age, or that sent
+//    nothing within its start-up grace: mode kSafeStop with fault kSensorStale, latched
+//    like the first kind (a clear is refused while the source stays silent).
 // Each fault event (not each faulty cycle) is counted and logged through RtLog; the snapshot
 // carries the active fault's code and its cause (StateSnapshot::fault_detail). A hardware
 // fault also calls Hardware::on_error() at the end of its cycle (once, until a clear).
@@ -42,12 +46,12 @@
 //
 // Threads: the loop thread (or the caller of run_cycle()) runs every plugin call. One
 // command-source thread may call push_command() (velocity commands go through a latest-value
-// slot: the newest command wins), one motion-capture thread
-// push_motion_capture(), one thread (the configuration watcher) the swap pair, one thread
-// (the calibration runner) the calibration calls, one thread (the daemon's request handler)
-// request_clear(), request_set_pose(), take_reply() and the hardware pause pair; any thread
-// may call latest(), timing(), clear_fault(), request_controlled_stop(), running() and
-// now_s().
+// slot: the newest command wins), one external-sensor thread (the DDS subscriber)
+// push_motion_capture() and push_gyro(), one thread (the configuration watcher) the swap
+// pair, one thread (the calibration runner) the calibration calls, one thread (the daemon's
+// request handler) request_clear(), request_set_pose(), take_reply() and the hardware pause
+// pair; any thread may call latest(), timing(), clear_fault(), request_controlled_stop(),
+// running() and now_s().
 
 #include <atomic>
 #include <condition_variable>
@@ -66,6 +70,7 @@
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/rt/clock_offset.hpp"
+#include "swivel/rt/external_sensors.hpp"
 #include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/odometry_monitor.hpp"
 #include "swivel/rt/realtime.hpp"
@@ -112,6 +117,10 @@ struct LoopOptions {
   /// loop period of that, so late or skipped cycles do not slow the rate down. A rate that
   /// divides rate_hz gives evenly spaced samples.
   double run_sample_rate_hz = 0.0;
+  /// Gyro and motion capture from outside the hardware plugin (push_gyro(),
+  /// push_motion_capture() with MotionCaptureSource::kWatched) and their staleness limits.
+  /// A configured gyro replaces the hardware reading's gyro rate with its newest sample.
+  ExternalSensorOptions external_sensors;
 };
 
 /// Readings in the twist window of `options` (TwistWindowOptions::readings).
@@ -186,10 +195,19 @@ class ControlLoop {
   /// always wins). Always true (accepted).
   bool push_command(const VelocityCommand& command) noexcept;
 
-  /// The motion-capture thread only (single producer). Real-time safe. The loop hands the
+  /// The external-sensor thread only (single producer). Real-time safe. The loop hands the
   /// newest sample to the localization as HardwareState::motion_capture when the hardware
-  /// reading carries none.
-  bool push_motion_capture(const MotionCaptureSample& sample) noexcept;
+  /// reading carries none. A sample of the watched source (MotionCaptureSource::kWatched)
+  /// must carry its reception time in stamp_s: it feeds that source's staleness watch.
+  /// False (dropped) when the ring is full.
+  bool push_motion_capture(const MotionCaptureSample& sample,
+                           MotionCaptureSource source = MotionCaptureSource::kSwivelTopic) noexcept;
+
+  /// The external-sensor thread only (single producer). Real-time safe. A body-frame gyro
+  /// sample; with LoopOptions::external_sensors.gyro enabled the newest one replaces the
+  /// hardware reading's gyro rate from the next cycle on (ignored otherwise). False
+  /// (dropped) when the ring is full.
+  bool push_gyro(const GyroSample& sample) noexcept;
 
   /// The recording thread only (single consumer). Real-time safe. Copies out the oldest run
   /// sample not taken yet (LoopOptions::run_sample_rate_hz); false when there is none. The
@@ -341,6 +359,9 @@ class ControlLoop {
   void raise_fault(FaultCode code, double now_s, const char* detail, double value = 0.0,
                    double limit = 0.0) noexcept;
   void check_odometry(const OdometryIncrement& odometry, double now_s) noexcept;
+  void take_external_gyro(double now_s) noexcept;
+  void take_motion_capture(double now_s, bool reading_ok) noexcept;
+  void check_external_sensors(double now_s) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
   void push_run_sample() noexcept;
@@ -393,9 +414,16 @@ class ControlLoop {
   // Written by the loop before it publishes a refused instance in retired_localization_.
   SwapOutcome retired_outcome_swap_{};
   LatestValue<VelocityCommand> commands_;
-  SpscRing<MotionCaptureSample, 64> motion_capture_;
+  struct MotionCaptureInput {
+    MotionCaptureSample sample;
+    MotionCaptureSource source = MotionCaptureSource::kSwivelTopic;
+  };
+  SpscRing<MotionCaptureInput, 64> motion_capture_;
   /// Motion-capture samples taken per cycle at most: the ring's capacity.
   static constexpr std::size_t kMotionCaptureDrainLimit = decltype(motion_capture_)::capacity();
+  SpscRing<GyroSample, 64> gyro_;
+  /// Gyro samples taken per cycle at most, for the same reason.
+  static constexpr std::size_t kGyroDrainLimit = decltype(gyro_)::capacity();
   SnapshotBuffer<StateSnapshot> snapshot_;
   SpscRing<RunSample, kRunSampleRingCapacity> run_samples_;
   std::atomic<std::uint64_t> run_samples_dropped_{0};
@@ -433,6 +461,10 @@ class ControlLoop {
   std::uint64_t run_sample_sequence_ = 0;   // run samples produced
   MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
   Twist2 run_sample_command_{};             // this cycle's target before the limits
+  GyroSample external_gyro_{};    // newest finite external gyro sample
+  bool has_external_gyro_ = false;
+  SensorWatch gyro_watch_;
+  SensorWatch motion_capture_watch_;
 
   // Non-real-time ownership.
   ClockOffset clock_offset_;

@@ -20,14 +20,15 @@ enum class LoopMode : std::uint8_t {
 /// Why the loop stopped the robot (or rejected something). kNone when healthy.
 enum class FaultCode : std::uint16_t {
   kNone = 0,
-  kCommandTimeout,      ///< newest velocity command older than its timeout
-  kNonFiniteCommand,    ///< NaN/inf in a velocity command (rejected)
-  kNonFiniteSensor,     ///< NaN/inf from the hardware plugin
-  kHardwareError,       ///< hardware plugin returned kError
-  kDrivetrainError,     ///< drivetrain plugin returned kError
-  kLocalizationError,   ///< localization plugin returned kError or a non-finite pose
-  kCalibrationError,    ///< calibration procedure failed or was cancelled
+  kCommandTimeout,        ///< newest velocity command older than its timeout
+  kNonFiniteCommand,      ///< NaN/inf in a velocity command (rejected)
+  kNonFiniteSensor,       ///< NaN/inf from the hardware plugin
+  kHardwareError,         ///< hardware plugin returned kError
+  kDrivetrainError,       ///< drivetrain plugin returned kError
+  kLocalizationError,     ///< localization plugin returned kError or a non-finite pose
+  kCalibrationError,      ///< calibration procedure failed or was cancelled
   kOdometryInconsistent,  ///< sustained disagreement: encoders vs gyro, or drivetrain residual
+  kSensorStale,           ///< a configured external sensor (DDS gyro, motion capture) went silent
 };
 
 /// Stable snake_case name of a fault (status lines, logs, DDS). Header-only so that the DDS
@@ -43,6 +44,7 @@ inline const char* fault_code_name(FaultCode code) noexcept {
     case FaultCode::kLocalizationError: return "localization_error";
     case FaultCode::kCalibrationError: return "calibration_error";
     case FaultCode::kOdometryInconsistent: return "odometry_inconsistent";
+    case FaultCode::kSensorStale: return "sensor_stale";
   }
   return "unknown";
 }
