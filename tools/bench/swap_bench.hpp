@@ -1,7 +1,7 @@
 #pragma once
 // swivel-bench swap: how long a localization hot swap takes, from the request to the new
 // plugin's first update on the loop, while the loop runs at its rate with the plugins of a
-// daemon configuration (DESIGN.md "Hot swap").
+// daemon configuration (docs/architecture.md "Reload and hot swap").
 
 #include <string>
 

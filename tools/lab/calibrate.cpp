@@ -1,4 +1,4 @@
-// swivel-lab calibrate: the geometric calibration of PAPERS.md §1 from recorded run logs
+// swivel-lab calibrate: the geometric calibration of docs/methods.md §1 from recorded run logs
 // (two per module), written as a calibrated copy of the nominal robot model.
 
 #include <CLI/CLI.hpp>

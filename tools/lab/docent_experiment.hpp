@@ -1,5 +1,5 @@
 #pragma once
-// The docent paper's experiment (PAPERS.md §2) in simulation: straight runs along the
+// The docent paper's experiment (docs/methods.md §2) in simulation: straight runs along the
 // corridor lines S1 and S2 on a docent robot whose true sensors and wheels differ from the
 // nominal model by drawn, stated errors, localized by E/G, LCAKF, LCALSM (paper and
 // heading_aligned) and the pose EKF, all from the same encoder and gyro readings.

@@ -1,4 +1,4 @@
-// swivel-lab reproduce: the group of paper reproductions (PAPERS.md). Each reproduction lives
+// swivel-lab reproduce: the group of paper reproductions (docs/methods.md). Each reproduction lives
 // in its own file and is listed in reproduce.inc, so that adding one touches one line here.
 
 #include <CLI/CLI.hpp>

@@ -1,4 +1,4 @@
-// swivel-lab reproduce docent: the docent paper's straight-run comparison (PAPERS.md §2) in
+// swivel-lab reproduce docent: the docent paper's straight-run comparison (docs/methods.md §2) in
 // simulation, printed in the paper's table layout with the paper's values beside ours, plus
 // results.json and two gnuplot PNGs.
 
@@ -38,7 +38,7 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::size_t kPaperMethods = 3;  // E/G, LCAKF, LCALSM
 constexpr std::size_t kPaperRuns = 5;
 
-// The paper's published values (PAPERS.md §2), indexed [scenario][method] and
+// The paper's published values (docs/methods.md §2), indexed [scenario][method] and
 // [scenario][run][method]; method order E/G, LCAKF, LCALSM.
 constexpr std::array<std::array<double, kPaperMethods>, 2> kPaperMaxCm{{
     {13.44, 13.89, 5.35},
@@ -250,7 +250,7 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
                   const std::vector<ScenarioSummary>& summaries,
                   const std::vector<std::string>& assumption_lines) {
   const std::size_t runs = results.front().runs.size();
-  os << "swivel-lab reproduce docent: PAPERS.md §2 (E/G, LCAKF, LCALSM) in simulation\n"
+  os << "swivel-lab reproduce docent: docs/methods.md §2 (E/G, LCAKF, LCALSM) in simulation\n"
      << "Our values are measured in simulation, as mean+-standard error over the runs where "
         "they are over runs; columns labelled \"paper\" are the paper's published values.\n\n"
         "Assumptions:\n";
@@ -401,7 +401,7 @@ nlohmann::json to_json(const RobotModel& nominal, const DocentExperimentConfig& 
   using nlohmann::json;
   json j;
   j["tool"] = "swivel-lab reproduce docent";
-  j["paper"] = "PAPERS.md section 2 (LCALSM docent robot)";
+  j["paper"] = "docs/methods.md section 2 (LCALSM docent robot)";
   j["robot_model"] = nominal.source_file;
   j["config"] = {
       {"runs", c.runs},
@@ -636,7 +636,7 @@ void add_reproduce_docent_command(CLI::App& reproduce, int& exit_code) {
   auto options = std::make_shared<DocentCommandOptions>();
   CLI::App* cmd = reproduce.add_subcommand(
       "docent",
-      "PAPERS.md §2: E/G, LCAKF and LCALSM (plus the heading_aligned variant and the EKF) on "
+      "docs/methods.md §2: E/G, LCAKF and LCALSM (plus the heading_aligned variant and the EKF) on "
       "the simulated docent robot, scenarios S1 and S2, compared with the paper's tables");
   cmd->add_option("--model", options->model_file, "nominal docent robot model (YAML)")
       ->check(CLI::ExistingFile)

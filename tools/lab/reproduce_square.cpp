@@ -1,4 +1,4 @@
-// swivel-lab reproduce square: the tracking test of PAPERS.md §1 (Table 5, Fig. 13) with its
+// swivel-lab reproduce square: the tracking test of docs/methods.md §1 (Table 5, Fig. 13) with its
 // statistics. The simulated robot's true parameters are the paper's calibrated values
 // (Table 4); it follows a 2.5 m square on its own odometry with the design values, with
 // the true values (the bound), and with the values each of K simulated calibrations (the
@@ -214,7 +214,7 @@ int run_square_reproduction(const SquareOptions& o) {
   const fs::path dir(o.out_dir);
   fs::create_directories(dir);
   nlohmann::json j;
-  j["experiment"] = "PAPERS.md §1 Table 5: square tracking on odometry";
+  j["experiment"] = "docs/methods.md §1 Table 5: square tracking on odometry";
   j["settings"] = {{"side_m", kSideM},
                    {"laps", so.run.laps},
                    {"runs_per_direction", so.runs_per_direction},

@@ -1,5 +1,5 @@
 #pragma once
-// One closed-loop run of the Table 5 square (PAPERS.md §1) on the simulated world: the
+// One closed-loop run of the Table 5 square (docs/methods.md §1) on the simulated world: the
 // robot follows the square on its own odometry, computed with the model it is given
 // (nominal or calibrated), while the world moves with the true model.
 

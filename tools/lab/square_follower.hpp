@@ -1,5 +1,5 @@
 #pragma once
-// A waypoint follower for the square path of PAPERS.md §1 (Table 5): straight legs between
+// A waypoint follower for the square path of docs/methods.md §1 (Table 5): straight legs between
 // corners and turns in place at them, closed on the robot's own odometry pose. It returns
 // body twists; the caller turns them into actuator setpoints with its model's inverse
 // kinematics, so a wrong model shows up as the true path drifting from the commanded one.

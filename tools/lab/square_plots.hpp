@@ -1,6 +1,6 @@
 #pragma once
 // The plots of `swivel-lab reproduce square` (gnuplot, PNG): the traced square runs
-// (Fig. 13 of PAPERS.md §1) and the spread of the change over the calibration seeds.
+// (Fig. 13 of docs/methods.md §1) and the spread of the change over the calibration seeds.
 
 #include <filesystem>
 

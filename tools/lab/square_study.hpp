@@ -1,5 +1,5 @@
 #pragma once
-// The Table 5 study of PAPERS.md §1 with its statistics: the simulated robot (true model:
+// The Table 5 study of docs/methods.md §1 with its statistics: the simulated robot (true model:
 // the paper's Table 4) tracks the square with the design values, with the true values
 // themselves (the best any calibration could give), and with the values each of K
 // simulated calibrations recovers, N runs per direction each. Every run and every

@@ -15,7 +15,7 @@ enum class TrajectoryKind {
   kSpin,           ///< turn in place
   kFigure8,        ///< a counter-clockwise then a clockwise circle, repeated
   kStopAndGo,      ///< forward in bursts with stops (accelerations for slip and lag)
-  kSquare,         ///< 2.5 m square at 0.2 m/s with 90 deg turns in place (PAPERS.md §1)
+  kSquare,         ///< 2.5 m square at 0.2 m/s with 90 deg turns in place (docs/methods.md §1)
   kStrafe,         ///< sideways (swpc)
   kSpinTranslate,  ///< constant world-frame velocity while spinning (swpc)
   kCalibration,    ///< the locked-module calibration motion (swpc; not a twist profile)

@@ -1,5 +1,5 @@
 #pragma once
-// The robot model of DESIGN.md "Robot model (YAML)": plain data shared by the daemon,
+// The robot model of README "Configuration reference: robot model": plain data shared by the daemon,
 // the plugins, the simulator and the offline tools. Loading and saving YAML lives in
 // robot_model_io.hpp so that maths libraries can use these types without yaml-cpp.
 
@@ -16,7 +16,7 @@ struct DifferentialParams {
   double track_width_m = 0.40;
 };
 
-/// One single-wheel powered caster (PAPERS.md §1 conventions: heading u = (cos phi, sin phi),
+/// One single-wheel powered caster (docs/methods.md §1 conventions: heading u = (cos phi, sin phi),
 /// contact point c = p - d u, measured steering = true - steering_offset).
 struct SwpcModuleParams {
   double x_m = 0.0;                  ///< steering axis, robot frame
@@ -45,9 +45,9 @@ struct SensorParams {
   MotionCaptureParams motion_capture;
 };
 
-/// What the robot's own motion controller enforces (DESIGN.md `limits:`). Read by the
+/// What the robot's own motion controller enforces (the robot model's `limits:`). Read by the
 /// simulator, the model-gap replay and the daemon's command limiter; an absent limit is not
-/// applied. The first three keys are DESIGN.md's; the velocity and jerk limits are Swivel's.
+/// applied. The first three keys are the common motion-controller ones; the velocity and jerk limits are Swivel's.
 struct MotionLimits {
   std::optional<double> linear_velocity_mps;          ///< body speed, per axis (x, y)
   std::optional<double> angular_velocity_radps;

@@ -1,5 +1,5 @@
 #pragma once
-// Run logs (DESIGN.md "Run logs"): the CSV that the daemon records, the simulator writes
+// Run logs: the CSV that the daemon records, the simulator writes
 // and every offline tool reads. One row per sample, SI units, radians.
 //
 //   # swivel-run 1

@@ -58,7 +58,7 @@ enum class ModuleDriveMode : std::uint8_t {
   kVelocity = 0,   ///< wheel rate and steering rate setpoints are tracked
   kLocked = 1,     ///< steering and wheel held still (calibration pivot)
   kFreeSteer = 2,  ///< wheel rate tracked, steering left free to self-align
-  /// Wheel driven by a constant torque, steering free (PAPERS.md §1's calibration drive): the
+  /// Wheel driven by a constant torque, steering free (docs/methods.md §1's calibration drive): the
   /// wheel rolls without slipping at whatever rate the motion asks; the wheel-rate setpoint
   /// only sets the pace (a simulator) or the torque level (hardware).
   kTorque = 3,

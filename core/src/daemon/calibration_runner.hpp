@@ -1,5 +1,5 @@
 #pragma once
-// The daemon's side of a calibration (DESIGN.md "Plugins", calibration kind): creates and
+// The daemon's side of a calibration (docs/architecture.md "Plugin kinds", calibration kind): creates and
 // configures the calibration plugin, hands it to the real-time loop, follows its progress,
 // takes it back when the loop lets go of it, analyses the recording on a worker thread,
 // writes the calibrated robot model as a new file (calibration_output.hpp: the

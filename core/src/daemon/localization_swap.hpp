@@ -1,7 +1,7 @@
 #pragma once
 // The localization instance the real-time loop uses and a hot swap in flight: hands a new
 // instance to the loop, learns whether the loop took it or rolled it back, and destroys
-// whichever instance the loop let go of, off the loop (DESIGN.md "Hot swap").
+// whichever instance the loop let go of, off the loop (docs/architecture.md "Reload and hot swap").
 //
 // Main thread only (reloads and the main loop's periodic collection). Not real-time safe.
 

@@ -1,5 +1,5 @@
 #pragma once
-// `swiveld --record`: records the live run as a run log (DESIGN.md "Run logs"), one row per
+// `swiveld --record`: records the live run as a run log (swivel/run_log.hpp), one row per
 // new loop state at the recording rate, from its own thread; flushed every second and at
 // the end.
 

@@ -67,7 +67,7 @@ std::string nominal_model_yaml(const RunSpec& spec) {
   const bool swpc = spec.robot == Robot::kSwpc4;
   std::string y;
   if (swpc) {
-    y += "# swpc4: four single-wheel powered casters, PAPERS.md §1 design values (nominal).\n";
+    y += "# swpc4: four single-wheel powered casters, docs/methods.md §1 design values (nominal).\n";
     y += "# Steering angles: measured = true - steering_offset_rad; contact trails the axis.\n";
     y += "name: swpc4\ndrivetrain: swpc\nswpc:\n  modules:\n";
     for (const SwpcModule& m : swpc4_nominal()) {

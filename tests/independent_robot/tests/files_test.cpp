@@ -1,5 +1,5 @@
 // The files a run writes, read back with the project's own readers: proof of the format of
-// DESIGN.md "Run logs" and "Robot model (YAML)". Also determinism.
+// swivel/run_log.hpp and README "Configuration reference: robot model". Also determinism.
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The generator's own kinematics against PAPERS.md's equations and against geometry.
+// The generator's own kinematics against docs/methods.md's equations and against geometry.
 
 #include <gtest/gtest.h>
 

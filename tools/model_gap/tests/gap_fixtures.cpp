@@ -63,7 +63,7 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
   const auto rows = static_cast<std::size_t>(std::llround(duration_s * rate_hz)) + 1;
   const double dt = 1.0 / rate_hz;
   // The robot's controller runs at 1 kHz on the continuously changing command, as a real
-  // drive does; rows sample it (DESIGN.md "Run logs").
+  // drive does; rows sample it (swivel/run_log.hpp).
   const auto control_steps = static_cast<int>(std::max(1.0, std::round(dt / 0.001)));
   const double h = dt / control_steps;
   const sim::OpenLoopController controller(nominal, truth.limits);

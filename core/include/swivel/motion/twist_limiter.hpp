@@ -47,7 +47,7 @@ class AxisLimiter {
 };
 
 /// The three axes of a body twist: x and y share the linear limits (each axis on its own,
-/// as DESIGN.md's `limits:` states them), wz takes the angular ones.
+/// as the robot model's `limits:` states them), wz takes the angular ones.
 class TwistLimiter {
  public:
   TwistLimiter() noexcept = default;

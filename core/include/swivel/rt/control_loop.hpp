@@ -1,5 +1,5 @@
 #pragma once
-// The real-time loop (DESIGN.md "The real-time loop"). One thread at a fixed period runs:
+// The real-time loop (docs/architecture.md "One cycle of the loop"). One thread at a fixed period runs:
 // hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
 // forward -> localization update -> newest velocity command -> motion limits -> drivetrain
 // inverse -> write hardware -> publish a StateSnapshot -> record timing.

@@ -1,6 +1,6 @@
 #pragma once
 // The `swpc_geometric` calibration plugin: a thin adapter that reads its parameters, runs the
-// calibration procedure of PAPERS.md §1 (calibration_procedure.hpp, the same state machine
+// calibration procedure of docs/methods.md §1 (calibration_procedure.hpp, the same state machine
 // the offline simulated calibration runs) on the real-time loop, publishes its progress to
 // other threads, and hands the recorded runs to the calibration maths off the loop.
 //

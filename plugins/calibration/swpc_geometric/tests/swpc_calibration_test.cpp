@@ -50,7 +50,7 @@ TEST_P(NoiseFreeCalibration, RecoversRandomTrueParameters) {
 }
 
 TEST(NoiseFreeCalibrationDirection, ClockwiseRotationAndOtherLockedAnglesRecoverToo) {
-  // PAPERS.md: the apex direction depends on the steering change, not on the turn direction.
+  // docs/methods.md: the apex direction depends on the steering change, not on the turn direction.
   std::mt19937_64 rng(77);
   const auto truth = test::random_robot(4, rng);
   CalibrationMotionOptions opt;

@@ -16,7 +16,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// The paper's design values (PAPERS.md §1), in metres.
+// The paper's design values (docs/methods.md §1), in metres.
 std::vector<SwpcModuleParams> design_modules() {
   return {{0.215, 0.125, 0.0, 0.020, 0.055},
           {0.215, -0.125, 0.0, 0.020, 0.055},

@@ -1,4 +1,4 @@
-// The calibration motion of PAPERS.md §1 in the simulated world.
+// The calibration motion of docs/methods.md §1 in the simulated world.
 
 #include <gtest/gtest.h>
 

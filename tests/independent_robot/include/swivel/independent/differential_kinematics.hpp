@@ -1,5 +1,5 @@
 #pragma once
-// Differential-drive kinematics (PAPERS.md §2, eq. (1)-(4)), written for this generator
+// Differential-drive kinematics (docs/methods.md §2, eq. (1)-(4)), written for this generator
 // alone: the robot's controller uses the inverse with the nominal geometry, the true robot
 // moves by the forward with the true one.
 

@@ -8,8 +8,8 @@
 namespace swivel::independent {
 
 struct GeneratedRun {
-  std::string run_csv;             ///< DESIGN.md "Run logs"
-  std::string nominal_model_yaml;  ///< DESIGN.md "Robot model (YAML)"
+  std::string run_csv;             ///< swivel/run_log.hpp
+  std::string nominal_model_yaml;  ///< README "Configuration reference: robot model"
 };
 
 /// Simulates `spec` and writes both files. Deterministic: the same spec gives byte-identical

@@ -21,7 +21,7 @@ inline constexpr double kSteeringRateLimitRadps = 6.0;  ///< swpc4, per module
 /// docent: r = 0.075 m both wheels, b = 0.40 m.
 DifferentialGeometry docent_nominal();
 
-/// swpc4: PAPERS.md §1's design values, modules in the order (0.215, 0.125),
+/// swpc4: docs/methods.md §1's design values, modules in the order (0.215, 0.125),
 /// (0.215, -0.125), (-0.215, -0.125), (-0.215, 0.125) m; d = 0.020 m, r = 0.055 m, offset 0.
 std::array<SwpcModule, 4> swpc4_nominal();
 

@@ -1,6 +1,6 @@
 #pragma once
-// The two files a run hands to its users: the run log (DESIGN.md "Run logs") and the
-// nominal robot model (DESIGN.md "Robot model (YAML)"), written here as text.
+// The two files a run hands to its users: the run log (swivel/run_log.hpp) and the
+// nominal robot model (README "Configuration reference: robot model"), written here as text.
 
 #include <string>
 

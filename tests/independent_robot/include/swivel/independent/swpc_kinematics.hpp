@@ -1,5 +1,5 @@
 #pragma once
-// Kinematics of single-wheel powered casters (PAPERS.md §1), written for this generator
+// Kinematics of single-wheel powered casters (docs/methods.md §1), written for this generator
 // alone. Conventions: steering-axis velocity v_s = (vx - w y, vy + w x); wheel heading
 // u = (cos phi, sin phi), normal n = (-sin phi, cos phi); the contact point trails the axis,
 // c = p - d u; rolling r psi_dot = u . v_s; no lateral slip phi_dot = (n . v_s) / d - w.

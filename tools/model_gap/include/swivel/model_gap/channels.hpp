@@ -10,7 +10,7 @@
 
 namespace swivel::model_gap {
 
-/// Which question a channel answers (DESIGN.md "Model-gap workflow"). The two are decided
+/// Which question a channel answers (tools/lab/GAP.md). The two are decided
 /// separately: a disagreement in one never vetoes a finding in the other.
 enum class Question {
   /// Geometry and sensors: the measured encoders, steering angles and gyro, dead-reckoned,

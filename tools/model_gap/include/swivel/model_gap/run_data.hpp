@@ -1,5 +1,5 @@
 #pragma once
-// A run (DESIGN.md "Run logs") as columns, the shape the replay and the analysis work on.
+// A run (swivel/run_log.hpp) as columns, the shape the replay and the analysis work on.
 
 #include <cstddef>
 #include <string>
@@ -31,7 +31,7 @@ struct RunData {
   }
 };
 
-/// Reads a run log (CSV of DESIGN.md "Run logs").
+/// Reads a run log (CSV of swivel/run_log.hpp).
 /// @throws RunLogError (a std::runtime_error) naming the file and line for malformed or
 /// truncated content.
 RunData load_run(const std::string& path);

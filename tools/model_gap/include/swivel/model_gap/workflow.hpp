@@ -1,5 +1,5 @@
 #pragma once
-// The model-gap workflow of DESIGN.md, as two questions decided separately:
+// The model-gap workflow (tools/lab/GAP.md), as two questions decided separately:
 //   1. sensor to pose: dead reckoning from the measured encoders, steering and gyro against
 //      motion capture (sensor_replay.hpp) - geometry and sensors;
 //   2. command to motion: the logged commands replayed through the simulator against every

@@ -1,5 +1,5 @@
 #pragma once
-// Recorded data in, robot model out: turns calibration run logs (DESIGN.md "Run logs") into
+// Recorded data in, robot model out: turns calibration run logs (swivel/run_log.hpp) into
 // the calibration's input, and a calibration result into a calibrated robot model. Not
 // real-time safe (allocates, throws); used by the offline tools and off the daemon's loop.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Exact geometric model of the calibration motion of PAPERS.md §1, for tests and the Monte
+// Exact geometric model of the calibration motion of docs/methods.md §1, for tests and the Monte
 // Carlo: the robot turns rigidly about the wheel contact point of one locked module while
 // the other casters are self-aligned and roll without slip. It has no dynamics (no caster
 // transients, no torque control); the simulator covers those.

@@ -1,5 +1,5 @@
 #pragma once
-// The calibration procedure of PAPERS.md §1 as a state machine stepped once per control
+// The calibration procedure of docs/methods.md §1 as a state machine stepped once per control
 // cycle: what the daemon's `swpc_geometric` plugin runs on the real-time loop and what the
 // offline simulated calibration (simulated_procedure.hpp) runs on the simulated world, so
 // that both record the same runs and hand them to the same analysis.

@@ -14,11 +14,11 @@
 
 namespace swivel::calibration {
 
-/// The paper's uncalibrated 4-module design (PAPERS.md §1): axes at (+-215, +-125) mm,
+/// The paper's uncalibrated 4-module design (docs/methods.md §1): axes at (+-215, +-125) mm,
 /// delta 0, d 20 mm, r 55 mm.
 std::vector<SwpcModuleParams> paper_design_modules();
 
-/// The paper's calibrated values of its real robot (PAPERS.md §1, Table 4), in metres and
+/// The paper's calibrated values of its real robot (docs/methods.md §1, Table 4), in metres and
 /// radians: a true robot unlike the design, for simulations (config/robots/swpc4_table4.yaml
 /// holds the same values).
 std::vector<SwpcModuleParams> paper_table4_modules();

@@ -1,5 +1,5 @@
 #pragma once
-// The calibration of PAPERS.md §1 on the simulated world, offline: the daemon's procedure
+// The calibration of docs/methods.md §1 on the simulated world, offline: the daemon's procedure
 // (calibration_procedure.hpp, the state machine its `swpc_geometric` plugin runs) stepped
 // at the loop rate against a sim::World whose robot has the TRUE model, read -> procedure
 // -> write as the daemon's loop does it, then the same analysis. What the world adds:

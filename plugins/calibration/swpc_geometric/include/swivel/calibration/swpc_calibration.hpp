@@ -1,6 +1,6 @@
 #pragma once
 // Geometric kinematic calibration of a robot on N single-wheel powered casters
-// (PAPERS.md §1): from motion capture and encoder data recorded while the robot turns about
+// (docs/methods.md §1): from motion capture and encoder data recorded while the robot turns about
 // one locked module, twice per module at two locked steering angles, recover every module's
 // steering-axis position (x, y), steering offset delta, caster offset d and wheel radius r.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Kinematics of the differential-drive (docent) robot, PAPERS.md §2 eq. (1)-(6).
+// Kinematics of the differential-drive (docent) robot, docs/methods.md §2 eq. (1)-(6).
 // Plain maths: no threads, no YAML. Real-time safe (no allocation, noexcept).
 
 #include "swivel/robot_model.hpp"

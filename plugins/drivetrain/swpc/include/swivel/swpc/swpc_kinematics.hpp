@@ -1,5 +1,5 @@
 #pragma once
-// Kinematics of a robot on N single-wheel powered casters (PAPERS.md §1).
+// Kinematics of a robot on N single-wheel powered casters (docs/methods.md §1).
 // Conventions: steering-axis velocity v_s = (vx - w y_i, vy + w x_i); wheel heading
 // u = (cos phi, sin phi), normal n = (-sin phi, cos phi); contact c = p - d u (trailing);
 // rolling r psi_dot = u . v_s; no lateral slip phi_dot = (n . v_s)/d - w. phi here is the

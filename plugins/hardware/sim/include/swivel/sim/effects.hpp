@@ -1,5 +1,5 @@
 #pragma once
-// The library of named effects (DESIGN.md "Robot model", `effects:`): small, documented
+// The library of named effects (README "Configuration reference: robot model", `effects:`): small, documented
 // extensions of a robot model that the simulated world applies on top of the model's
 // parameters. This file and effects.cpp are the only place that defines them: their names,
 // parameters, identity values, ranges and how each alters the world. The model-gap

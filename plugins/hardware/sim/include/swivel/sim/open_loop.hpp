@@ -1,7 +1,7 @@
 #pragma once
 // Open-loop driving of a simulated robot: a controller that turns body twists into actuator
 // setpoints with the NOMINAL model's inverse kinematics (the drivetrain libraries), the
-// calibration motion of PAPERS.md §1, and the start-up alignment of a world's casters.
+// calibration motion of docs/methods.md §1, and the start-up alignment of a world's casters.
 // Used by `swivel-lab simulate` and by the model-gap replay, so that both drive the world
 // the same way.
 

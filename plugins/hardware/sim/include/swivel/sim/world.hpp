@@ -17,7 +17,7 @@
 //                  encoder follows the contact point's motion, as a torque-driven wheel's does;
 //      kLocked     wheel and steering held: its contact point cannot move, so the robot can
 //                  only rotate about it; the rotation rate is the least-squares fit of the
-//                  other modules' equations (the calibration motion of PAPERS.md §1).
+//                  other modules' equations (the calibration motion of docs/methods.md §1).
 // Sensors: quantized wheel and steering encoders (steering reads true - steering offset,
 // unwrapped like a multi-turn encoder), a gyro (scale * true + bias + white noise; the
 // true rate is the mean over the interval since the previous read, as an integrating

@@ -1,5 +1,5 @@
 #pragma once
-// LCAKF of PAPERS.md §2: a linear Kalman filter on the position coordinates, fed with the
+// LCAKF of docs/methods.md §2: a linear Kalman filter on the position coordinates, fed with the
 // E/G positions as measurements. The paper gives no model; this one is a constant-velocity
 // model per axis (state x, vx, y, vy; x and y independent), white acceleration process
 // noise, and the E/G position as a direct measurement with white noise. The heading is the

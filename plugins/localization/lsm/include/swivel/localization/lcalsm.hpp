@@ -1,5 +1,5 @@
 #pragma once
-// LCALSM of PAPERS.md §2: least-squares line compensation of stored E/G positions.
+// LCALSM of docs/methods.md §2: least-squares line compensation of stored E/G positions.
 // Plain maths: no threads, no YAML, fixed-capacity storage (no allocation); every method
 // is real-time safe.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// E/G (encoder/gyro) dead reckoning of PAPERS.md §2 eq. (1)-(6), driven by a drivetrain's
+// E/G (encoder/gyro) dead reckoning of docs/methods.md §2 eq. (1)-(6), driven by a drivetrain's
 // odometry increment so that it serves the differential robot and the holonomic SWPC
 // robot alike. Plain maths: no threads, no YAML. Every method is real-time safe.
 
