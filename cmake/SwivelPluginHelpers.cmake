@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # How a Swivel plugin library is built, for this tree and for plugins built elsewhere
 # against an installed Swivel (find_package(Swivel); installed next to SwivelConfig.cmake).
 

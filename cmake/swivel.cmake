@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Helpers shared by every folder: warnings, plugins and tests are declared the same way
 # everywhere.
 include(${CMAKE_CURRENT_LIST_DIR}/SwivelPluginHelpers.cmake)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // wheel_odometry: a localization plugin that integrates the drivetrain's odometry alone,
 // ignoring the gyro, with a configurable scale on the travelled distance. Small on
 // purpose: it shows the whole contract of a localization plugin built out of tree.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The plugin's real-time methods, 100 000 cycles under Swivel's allocation guard: no heap
 // operation may happen on the loop thread. Also checks that the odometry is integrated.
 

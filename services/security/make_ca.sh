@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Creates the identity CA and the permissions CA of a Swivel DDS Security profile.
 # Usage: make_ca.sh [DIR]   (default ./swivel-security)

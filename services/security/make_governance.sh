@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Renders the governance document from governance.xml.in and signs it with the permissions CA.
 # Usage: make_governance.sh [DIR]   (default ./swivel-security)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Creates the private key and the certificate (subject CN=NAME, signed by the identity CA)
 # of one participant.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Writes the permissions document of identity NAME for ROLE and signs it with the
 # permissions CA.

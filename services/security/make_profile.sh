@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Creates a complete profile: both CAs, the signed governance, the daemon's identity and one
 # trusted client's, each with signed permissions and a rendered Cyclone configuration.

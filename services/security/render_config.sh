@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck source-path=SCRIPTDIR
 # Renders secure.xml.in into DIR/identities/NAME/cyclonedds.xml, the configuration that
 # identity NAME runs with: CYCLONEDDS_URI=file://DIR/identities/NAME/cyclonedds.xml

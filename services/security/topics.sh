@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # Sourced by make_permissions.sh: which DDS topics are "state" (the daemon's output) and
 # which are "commands" (its input), as named in core/include/swivel/dds/topics.hpp and

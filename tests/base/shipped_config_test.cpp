@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where the shipped configuration is found: the source tree's config/ for executables in
 // the build tree, <sysconfdir>/swivel for installed ones, whatever the working directory.
 

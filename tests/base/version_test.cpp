@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The version every executable reports: CMake's project(VERSION) and, from a git checkout,
 // `git describe` at configure time.
 

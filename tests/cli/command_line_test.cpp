@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel::cli: --version and exit code 2 on usage errors, on a command line like the tools'.
 
 #include "swivel/cli/command_line.hpp"

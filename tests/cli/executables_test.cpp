@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Every Swivel executable answers --version with the project's version and exits 2 on a
 // usage error, whatever library parses its command line (CLI11 or Google Benchmark).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where a calibrated model goes, with the service's sandbox reproduced: the configuration
 // folder cannot be written (as under ProtectSystem=full) and systemd's StateDirectory= is
 // passed as $STATE_DIRECTORY.

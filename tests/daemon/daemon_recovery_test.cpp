@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's recovery paths in process, with its real-time loop running and no DDS: the
 // hardware lifecycle in the order the host calls it (the `lifecycle` test plugin writes it
 // down), clear and set-pose requests, and a hot swap that rolls back.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reload plan: what a changed configuration applies live and what waits for a restart,
 // computed from two configurations alone (no plugin, loop or process).
 

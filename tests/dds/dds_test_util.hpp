@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Helpers for the DDS tests: a reader/writer on their own participant, and waiting with a
 // generous deadline (discovery on a loaded machine can take seconds).

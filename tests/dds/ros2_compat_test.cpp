@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ROS 2 compatibility checked with raw Cyclone entities of the ROS 2 types, as
 // rmw_cyclonedds would create them: the wire type name, plain CDR, topic names and the
 // field mapping of nav_msgs/Odometry, geometry_msgs/Twist and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ROS 2 topics beyond odometry, each read back by its own subscriber created the way
 // rmw_cyclonedds creates one (the ROS 2 type, plain CDR, the QoS the ROS 2 consumer uses):
 // rt/tf, rt/<ns>/joint_states, rt/diagnostics and a TwistStamped rt/<ns>/cmd_vel with its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ROS 2 sensor topics end to end in one process: the test's own participant publishes
 // sensor_msgs/Imu and geometry_msgs/PoseStamped the way a ROS 2 driver does (the ROS 2
 // types, plain CDR, best-effort or reliable writers), the bridge takes them into a running

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The conversions behind the ROS 2 sensor topics, without DDS: the IMU mounting's yaw rate
 // against a full rotation built with Eigen, the motion-capture pose from a quaternion (and
 // its refusal of non-rotations), the loop's fault causes naming each topic, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivelctl as a user runs it: a separate process against daemons' bridges on the domain.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Consistency of the published pose covariances against the simulator's ground truth: the
 // normalised estimation error squared (NEES) e' P^-1 e, e = estimate - truth over (x, y,
 // yaw), averaged over independent simulated runs, must lie within the chi-square interval

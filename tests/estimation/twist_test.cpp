@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The published twist (StateSnapshot::odometry_twist, RobotState and rt/odom): its noise at
 // constant speed, its delay on a ramp and its covariance, measured through the real-time loop
 // on the simulated robots. The truth is the simulator's pose, integrated by the simulator.

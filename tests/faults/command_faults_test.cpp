@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rows of docs/faults.md for the velocity command stream: it stops, floods, or carries
 // non-finite or absurd values.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rows of docs/faults.md for external sensors (a ROS 2 IMU or motion-capture topic over
 // DDS), on sim + differential + raw_eg: the gyro comes from outside the hardware through the
 // loop's ring, as the DDS subscriber pushes it, here on the rig's synthetic clock. A source

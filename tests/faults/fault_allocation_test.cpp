@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The whole fault sequence of docs/faults.md on the real plugins, with the allocation guard
 // armed on the cycling thread only: no heap operation while faults are raised, reacted to
 // and cleared. Preparing plugin instances (the loader) and the flooding producer run on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A control loop on the real plugins, loaded through PluginLoader (sim hardware, a
 // drivetrain, a localization), driven with run_cycle() on synthetic time: deterministic,

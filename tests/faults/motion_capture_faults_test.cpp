@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rows of docs/faults.md for the motion-capture stream: gaps, and non-finite samples.
 // Samples come through the loop's motion-capture input (as the DDS bridge delivers them),
 // taken from the simulated world's true pose at 100 Hz.

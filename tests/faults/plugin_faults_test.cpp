@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rows of docs/faults.md for plugins that fail on the loop (an error status, an exception)
 // and plugin libraries that cannot be loaded when a hot swap is prepared.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rows of docs/faults.md for faulty sensor readings and a misbehaving hardware plugin, on
 // sim + differential + raw_eg (and sim + swpc + raw_eg where redundancy matters). Faults
 // are injected at run time through the sim plugin's hook, from the next cycle on.

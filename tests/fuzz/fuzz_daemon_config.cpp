@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // YAML text -> parse_daemon_config. Contract: a configuration or ConfigError, nothing else.
 // Relative paths resolve against config_dir/, which holds the robot models the corpus names.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bytes -> an incoming DDS sample, the way the daemon's subscriber receives it: Cyclone's
 // CDR validation (dds_stream_normalize_data) and deserialisation (dds_stream_read) with the
 // descriptors idlc generates from core/idl/, then the conversion into the loop's types.

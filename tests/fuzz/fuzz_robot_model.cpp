@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // YAML text -> parse_robot_model. Contract: a model or ConfigError, nothing else. A model
 // that parses must also survive robot_model_to_yaml and parse back to the same values, as
 // robot_model_io.hpp promises (calibration and the model-gap workflow write models back).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CSV text -> parse_run_log. Contract: a log or RunLogError, nothing else. A log that parses
 // must survive RunLogWriter and read back to the same values (the writer promises numbers
 // in the shortest form that reads back to the same double).

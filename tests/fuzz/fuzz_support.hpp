@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Shared by the fuzz targets: what to do when a parser breaks its contract. Aborting makes
 // libFuzzer save the input as a crash and makes the replay test fail.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Runs files through a fuzz target's LLVMFuzzerTestOneInput without libFuzzer, so that the
 // corpus and every saved crash are replayed by ctest in any build. Arguments are files or
 // directories (searched recursively); a directory that does not exist is skipped, because a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The real plugins (sim, the robot's drivetrain, raw_eg, then kalman and lsm swapped in),
 // loaded through PluginLoader as the daemon loads them, on a ControlLoop driven by
 // run_cycle() on a dedicated thread, for both robots (docent: differential; swpc4: four

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Child processes for the integration tests: swiveld and swivelctl run as real executables
 // with stdout and stderr in files, started with extra environment variables, signalled and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `swivelctl calibrate` against a running swiveld, as users run it: real processes, real DDS
 // on loopback (CYCLONEDDS_URI and every daemon's dds.config name config/dds/loopback.xml),
 // each test on its own DDS domain. The daemon runs a copy of config/swiveld_swpc4.yaml in a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swiveld as users run it: real processes, real DDS on loopback (CYCLONEDDS_URI points at
 // config/dds/loopback.xml and every daemon's dds.config names it too). Each test uses its
 // own DDS domain and robot id so that parallel test runs do not see each other.

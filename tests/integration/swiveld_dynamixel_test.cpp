@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The real swiveld with the `dynamixel` hardware plugin against emulated servos on a
 // pseudo-terminal: the differential docent and the four-module SWPC robot drive their
 // scripts with the odometry following; a silent servo, a run of CRC errors and a hardware

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Runs the real swiveld process on test configurations and checks what a user sees: the
 // robot moves as commanded, SIGTERM stops it cleanly within a second, bad configurations
 // are refused with a message.

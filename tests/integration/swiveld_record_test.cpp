@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Recording a live robot for the model-gap workflow: swiveld (simulated docent, driven by its
 // script) publishes run samples, `swivelctl record` writes them as a run log, and
 // `swivel-lab gap` with the robot's own model finds nothing missing. Real processes over

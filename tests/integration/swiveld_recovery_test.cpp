@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The recovery verbs as an operator uses them: swivelctl against a running swiveld over DDS
 // (loopback), each answered with the daemon's reply and an exit code.
 

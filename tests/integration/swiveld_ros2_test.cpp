@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swiveld with dds.ros2 enabled, read by subscribers of the ROS 2 types as a ROS 2 node on
 // the domain would create them: the odometry, its transform and the joint states come from
 // the same loop cycles and carry the same ROS time; the joint names follow the robot model;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How far the simulated robot travels after SIGTERM. swiveld runs the docent robot at 1 kHz
 // and is driven at 0.5 m/s over DDS; a swivelctl stream records the state (cycle stamps and
 // the simulator's true pose). The test sends SIGTERM at a CLOCK_MONOTONIC instant, takes the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Declares an ABI version the host does not speak.
 #include "test_localization.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Claims another C++ ABI revision than the host's compiler (as a plugin built with a
 // different compiler would): the loader must refuse it before calling into it.
 #include "test_localization.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Well-behaved: reads one optional parameter and rejects unknown ones.
 #include "swivel/config/param_reader.hpp"
 #include "test_localization.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Built as if against a Swivel whose HardwareState had grown by 8 bytes: the right ABI
 // version, the wrong layout. The loader must refuse it and name the type.
 #include <array>

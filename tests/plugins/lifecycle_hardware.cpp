@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A differential robot's hardware that writes down the order in which the host calls it:
 // its lifecycle hooks, the first read/write after each of them, and every call the
 // lifecycle forbids (read or write while inactive, two calls at once, deactivation while the

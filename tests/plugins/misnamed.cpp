@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The file says "misnamed", the descriptor says "other".
 #include "test_localization.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A hardware plugin as it was built against ABI 1, before Hardware had its lifecycle hooks:
 // the loader must refuse it before creating anything, because its vtable lacks them.
 #include "swivel/plugin/hardware.hpp"

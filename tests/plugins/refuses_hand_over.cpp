@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Refuses the hand-over: a hot swap to it must roll back, and a pose set through it must be
 // refused, without a fault. `throw: true` (params) throws from hand_over() instead of
 // returning kError, breaking the real-time rule on purpose.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A dead-simple localization that integrates odometry; the test plugins override one
 // behaviour each.

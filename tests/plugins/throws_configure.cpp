@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Requires a parameter and range-checks it, as real plugins do: ConfigError from configure.
 #include "swivel/config/param_reader.hpp"
 #include "test_localization.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Its constructor throws: the host must report the message, not crash.
 #include <stdexcept>
 

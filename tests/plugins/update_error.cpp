@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fails in update after `fail_after_cycles` good cycles (params), like a diverging filter.
 #include "swivel/config/param_reader.hpp"
 #include "test_localization.hpp"

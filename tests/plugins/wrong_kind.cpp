@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Named like a localization plugin but declares itself a drivetrain.
 #include "test_localization.hpp"
 

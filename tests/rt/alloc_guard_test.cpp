@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Proves the loop's real-time rule "no heap operation on the loop thread" (STYLE.md): many
 // cycles with a localization hot swap, faults and a command timeout in them (and, with
 // external sensors configured, the gyro and motion-capture rings drained every cycle, their

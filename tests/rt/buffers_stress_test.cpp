@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Two threads hammering the lock-free buffers. Under ThreadSanitizer (tsan preset) these
 // also prove the absence of data races; in every build they check that nothing is lost,
 // duplicated, reordered or torn.

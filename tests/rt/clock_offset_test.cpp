@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ROS time from the loop's monotonic stamps: the measured offset, its conversion, and the
 // snapshot's two stamps of one instant, checked against the clocks read by the test itself.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The loop's motion limits, its controlled stop, and the ways out of a fault: one-shot clear
 // requests, setting the pose, the hardware's error hook and pause, and a hot swap that rolls
 // back. In-process fakes on synthetic time (run_cycle), except where a loop thread is the

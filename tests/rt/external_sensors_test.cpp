@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // External sensors on the loop, driven by run_cycle() on synthetic time with the fake
 // plugins: the staleness watch, the configured gyro replacing the hardware's, a source never
 // heard faulting after its grace, and the watched motion capture reaching the localization.

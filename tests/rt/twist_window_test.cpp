@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // TwistWindow against a drivetrain whose "twist" is three of its channels' rates, so that the
 // fit, the covariance and the bookkeeping can be checked against closed forms.
 

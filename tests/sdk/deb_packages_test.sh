@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Usage: deb_packages_test.sh BUILD_DIR CPACK
 # Builds the two Debian packages from this build, checks what each holds and declares, then
 # unpacks swivel into an empty root and runs the daemon from there, with the configuration,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Usage: minimal_configure_test.sh SOURCE_DIR CMAKE
 # Configures Swivel as if GoogleTest, Google Benchmark and Ceres were not installed.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Usage: out_of_tree_plugin_test.sh BUILD_DIR SOURCE_DIR SWIVELD CMAKE
 set -euo pipefail
 build=$1 source=$2 swiveld=$3 cmake=$4

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # CTest fixture: a fresh profile for the security cases.
 #   DIR                    daemon swiveld, client swivelctl, observer swivelobs
 #   DIR/rogue              an intruder: identity CN=swivelctl from another identity CA, with

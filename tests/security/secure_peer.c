@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A small DDS participant for the security tests. Its identity, and whether it has one at
 // all, comes from CYCLONEDDS_URI; what it does comes from the command line:
 //

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The DDS Security cases. Each starts secure_peer processes with real credentials from the
 # fixture's profile; a stand-in robot plays the daemon (identity swiveld).
 # Usage: security_test.sh CASE   (environment from tests/security/CMakeLists.txt)

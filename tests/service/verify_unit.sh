@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Lints a systemd unit: fails on a non-zero exit of `systemd-analyze verify` and on any
 # output at all, since systemd reports most problems as warnings with exit status 0.
 unit="$1"

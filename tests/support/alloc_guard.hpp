@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Heap-operation counting for tests, in the spirit of Drake's LimitMalloc: linking
 // swivel_test_support replaces the global operator new/delete (every variant) and, in builds

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // In-process stand-ins for the hardware, drivetrain and localization plugins: a two-wheel
 // differential robot whose "hardware" integrates the commanded wheel rates exactly. Knobs

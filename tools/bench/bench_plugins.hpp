@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The plugins a benchmark runs the ControlLoop with: the ones a daemon configuration names,
 // loaded and configured the way swiveld does it, or in-process fakes when asked for (or when

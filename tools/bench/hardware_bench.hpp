@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // swivel-bench hardware: the `dynamixel` plugin on an emulated bus. For 2 servos (the docent)
 // and 8 (the four-module SWPC robot) at 1 and 4 Mbps: the bus round trip of one cycle

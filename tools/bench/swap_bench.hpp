@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // swivel-bench swap: how long a localization hot swap takes, from the request to the new
 // plugin's first update on the loop, while the loop runs at its rate with the plugins of a

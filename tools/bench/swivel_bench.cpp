@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-bench loop (swap: see swap_bench.hpp): how much wake-up lateness the control loop adds to
 // what the machine itself delivers. Two phases alternate in short blocks, floor then loop,
 // A B A B ...: (a) the floor, a bare clock_nanosleep loop at the same period and scheduling;

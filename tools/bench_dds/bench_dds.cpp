@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-bench-dds: how old is the robot state when a client on the same host gets it?
 //
 // A server process runs the DdsBridge over a synthetic 1 kHz loop (each snapshot stamped

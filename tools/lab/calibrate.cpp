@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab calibrate: the geometric calibration of docs/methods.md §1 from recorded run logs
 // (two per module), written as a calibrated copy of the nominal robot model.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The docent paper's experiment (docs/methods.md §2) in simulation: straight runs along the
 // corridor lines S1 and S2 on a docent robot whose true sensors and wheels differ from the

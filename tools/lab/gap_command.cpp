@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab gap: the model-gap workflow (tools/lab/GAP.md) on a run log and
 // the robot's nominal model; writes DIR/report.json, DIR/report.md (with PNG plots) and
 // DIR/model_augmented.yaml.

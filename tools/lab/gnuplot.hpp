@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Running gnuplot on a script the reproductions write next to their data.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab: the offline tools. Subcommands register themselves through commands.inc.
 
 #include <CLI/CLI.hpp>

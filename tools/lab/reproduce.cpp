@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab reproduce: the group of paper reproductions (docs/methods.md). Each reproduction lives
 // in its own file and is listed in reproduce.inc, so that adding one touches one line here.
 

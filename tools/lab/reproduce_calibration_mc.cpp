@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab reproduce calibration-mc: the Table 3 Monte Carlo, whose subcommand lives with
 // the calibration library (calibration_mc_command.hpp).
 

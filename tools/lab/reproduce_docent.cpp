@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab reproduce docent: the docent paper's straight-run comparison (docs/methods.md §2) in
 // simulation, printed in the paper's table layout with the paper's values beside ours, plus
 // results.json and two gnuplot PNGs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab reproduce square: the tracking test of docs/methods.md §1 (Table 5, Fig. 13) with its
 // statistics. The simulated robot's true parameters are the paper's calibrated values
 // (Table 4); it follows a 2.5 m square on its own odometry with the design values, with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-lab simulate: drive the simulated robot (true model plus effects) open-loop with
 // the nominal model's inverse kinematics along a standard trajectory and write a run log.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "square_experiment.hpp"
 
 #include <cmath>

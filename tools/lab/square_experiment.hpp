@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One closed-loop run of the Table 5 square (docs/methods.md §1) on the simulated world: the
 // robot follows the square on its own odometry, computed with the model it is given

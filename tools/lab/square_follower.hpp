@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A waypoint follower for the square path of docs/methods.md §1 (Table 5): straight legs between
 // corners and turns in place at them, closed on the robot's own odometry pose. It returns

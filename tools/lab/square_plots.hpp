@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The plots of `swivel-lab reproduce square` (gnuplot, PNG): the traced square runs
 // (Fig. 13 of docs/methods.md §1) and the spread of the change over the calibration seeds.

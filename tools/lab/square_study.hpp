@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The Table 5 study of docs/methods.md §1 with its statistics: the simulated robot (true model:
 // the paper's Table 4) tracks the square with the design values, with the true values

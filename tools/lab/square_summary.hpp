@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The statistics of a Table 5 study (square_study.hpp): each model's end-pose mean absolute
 // error with its standard error, the changes against the design values, their spread over

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Commanded body twists of the standard test motions of `swivel-lab simulate`.
 

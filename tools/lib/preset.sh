@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced by the tools/ scripts. configure_preset PRESET BUILD_DIR: configures a CMake preset
 # into its build directory, first removing a directory that an earlier compiler configured
 # (CMake cannot switch a tree from g++ to clang in place).

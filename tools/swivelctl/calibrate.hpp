@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `swivelctl calibrate start|cancel|status`: the calibration requests of one daemon.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // swivelctl's view of the DDS domain: one participant, readers and writers of Swivel's
 // topics, and waiting for samples with a deadline.

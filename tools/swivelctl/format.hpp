@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // How swivelctl prints samples: one line each, or one JSON object per line.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivelctl: a command-line client of running swiveld daemons over DDS.
 
 #include <CLI/CLI.hpp>

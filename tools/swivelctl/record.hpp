@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `swivelctl record --out RUN.csv [--duration S]`: a running daemon's run samples
 // (swivel_run_samples) written as a run log, the file `swivel-lab gap` and the other offline

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Requests to one daemon and their answers: a Request (reload, clear, calibrate) or a
 // SetPose goes out with a fresh request id, and the Reply carrying that id comes back.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/dds/sensor_inputs.hpp"
 
 #include <spdlog/spdlog.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Taking samples from a Cyclone reader, shared by the bridge's readers and the sensor inputs
 // (private to swivel_dds). Not real-time safe.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The one clock of Swivel: CLOCK_MONOTONIC, the clock of the real-time loop, of every
 // `stamp_s` and `received_s` in the state and on DDS, and of systemd's MONOTONIC_USEC.

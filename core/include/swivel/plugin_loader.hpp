@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Finds plugin libraries by name on a search path, checks their descriptor and creates
 // instances. Start-up / non-real-time code: throws PluginError with the file and the reason.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Planar rigid-body helpers on Pose2 (types.hpp): composition, inverse, relative pose and
 // angle wrapping. Header-only, noexcept, allocation-free.

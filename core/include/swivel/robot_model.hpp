@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The robot model of README "Configuration reference: robot model": plain data shared by the daemon,
 // the plugins, the simulator and the offline tools. Loading and saving YAML lives in

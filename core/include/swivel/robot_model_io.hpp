@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading and writing robot models (YAML). Start-up code: throws ConfigError.
 

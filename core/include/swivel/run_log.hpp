@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Run logs: the CSV that the daemon records, the simulator writes
 // and every offline tool reads. One row per sample, SI units, radians.

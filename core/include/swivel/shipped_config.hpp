@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Where Swivel's shipped configuration is (robots/, dds/, swiveld.yaml): the source tree's
 // config/ for an executable in the build tree it was built in, otherwise the installed copy

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Plain data exchanged on the real-time loop. Every type here is trivially copyable so that
 // it can cross threads through the lock-free buffers. Frames: robot (body) frame x forward,

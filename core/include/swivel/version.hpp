@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Swivel's version: the project's (CMake project(VERSION)) and, when built from a git
 // checkout, `git describe` of the source tree when the build was configured.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main() of the Google Benchmark executables (swivel-bench-swpc, -localization,
 // -calibration): BENCHMARK_MAIN() plus `--version`, and exit code 2 on an unknown argument.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/robot_model_io.hpp"
 
 #include <yaml-cpp/yaml.h>

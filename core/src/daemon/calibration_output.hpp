@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Where the daemon writes a calibrated robot model. Under systemd the configuration folder
 // is read-only (ProtectSystem=full) and the unit's StateDirectory= (/var/lib/swivel) is the

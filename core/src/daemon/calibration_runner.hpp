@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's side of a calibration (docs/architecture.md "Plugin kinds", calibration kind): creates and
 // configures the calibration plugin, hands it to the real-time loop, follows its progress,

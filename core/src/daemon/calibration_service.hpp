@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The calibrate verb and the calibration runner's periodic work, as the daemon offers them:
 // with a `calibration:` section a CalibrationRunner answers start | cancel | status and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Watches the configuration file for changes. inotify watches the file's DIRECTORY, so an
 // editor that writes a new file and renames it over the old one (vim, sed -i, most tools)

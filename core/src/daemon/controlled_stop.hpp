@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Shutdown's first step: the robot brought to rest by the loop itself (commands ignored,
 // the twist ramped to zero within the controlled stop's limits) while the loop still runs.

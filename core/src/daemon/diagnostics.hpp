@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's Diagnostics sample (published by the DDS bridge's publisher thread): loop
 // rates and timing percentiles, faults, the plugins in use and the outcome of the last

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The hardware plugin's lifecycle calls made by the daemon off the loop
 // (swivel/plugin/hardware.hpp): activate() at start-up and on a clear, deactivate() at

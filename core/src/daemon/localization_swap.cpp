@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "localization_swap.hpp"
 
 #include <spdlog/spdlog.h>

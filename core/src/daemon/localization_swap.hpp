@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The localization instance the real-time loop uses and a hot swap in flight: hands a new
 // instance to the loop, learns whether the loop took it or rolled it back, and destroys

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The requests answered by the real-time loop itself, asked from the main thread: clear
 // (with the hardware re-activated first when it left its active state) and set-pose. Each

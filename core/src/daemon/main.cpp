@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swiveld: runs a robot from the real-time loop with the plugins its configuration names.
 //   swiveld --config FILE [--check] [--log-level LEVEL] [--record LOG.csv [--record-rate-hz HZ]]
 // SIGTERM/SIGINT stop it, SIGHUP reloads the configuration.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Assembling the daemon's plugins from its configuration, for the start-up and for a reload
 // alike: the search path, creating a plugin from its slot, the context its configure() gets,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What a configuration reload changes: a pure function from the running configuration and
 // the newly read one to a plan (what applies live, what needs a restart), with no plugin,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Requests that arrive over DDS (Request: reload, clear, calibrate; SetPose, also from ROS 2
 // initialpose): queued by the DDS subscriber thread, answered one at a time, in the order

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `swiveld --record`: records the live run as a run log (swivel/run_log.hpp), one row per
 // new loop state at the recording rate, from its own thread; flushed every second and at

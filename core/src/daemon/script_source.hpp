@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The built-in command source (`command.source: script`): a thread that plays the
 // configuration's motion script in a loop, pushing the step in force to the real-time loop

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Running as a systemd service (Type=notify, WatchdogSec=): READY=1, RELOADING=1 and
 // STOPPING=1 around the daemon's life and reloads, WATCHDOG=1 only while the real-time loop's

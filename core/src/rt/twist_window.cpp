@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/rt/twist_window.hpp"
 
 #include <Eigen/Core>

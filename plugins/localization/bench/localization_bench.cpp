@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-cycle cost of the localization plugins and the differential drivetrain, each loaded
 // from its shared library and driven through its interface with a 1 kHz docent-like motion
 // (0.3 m/s, gentle turn, gyro valid, a motion-capture sample every 10th cycle for the EKF

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Breaks the real-time rule on purpose: update() throws after `throw_after_cycles` good
 // cycles (params). The loop must catch it at the plugin boundary.
 #include <stdexcept>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // "NAME.PARAM=VALUE" as typed on a command line, and the table of settable parameters both
 // effect families share.

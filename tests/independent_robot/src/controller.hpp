@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The robot's own motion controller at 1 kHz: it knows only the nominal model. It limits the
 // body acceleration of the user's setpoint, then turns the limited twist into wheel and

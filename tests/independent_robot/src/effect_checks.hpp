@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Range checks of a spec's effects, shared by validate() and the NAME.PARAM=VALUE setters so
 // that both report the same names and ranges.

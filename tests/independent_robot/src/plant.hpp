@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The true robot's motion: drives, wheel-ground contact and body kinematics as one ordinary
 // differential equation, advanced with classic fourth-order Runge-Kutta while the

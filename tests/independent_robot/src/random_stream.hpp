@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Seeded random numbers, one independent stream per purpose (tour, process noise, sensor
 // noise, clocks) so that changing one part of a run leaves the others' draws unchanged.

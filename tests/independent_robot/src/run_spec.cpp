@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/independent/run_spec.hpp"
 
 #include <cmath>

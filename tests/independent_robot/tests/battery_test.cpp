@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The battery's coverage: every library effect at two sizes on each robot it applies to,
 // clean runs, pairs and effects outside the library, and every case producing valid files.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Each effect the generator can give the true robot, in a situation where its size can be
 // read off directly; the library's names and messages; what a correct workflow should name.
 

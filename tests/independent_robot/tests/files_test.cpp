@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The files a run writes, read back with the project's own readers: proof of the format of
 // swivel/run_log.hpp and README "Configuration reference: robot model". Also determinism.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The generator's own kinematics against docs/methods.md's equations and against geometry.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The nominal robots in closed-form situations: encoders, gyro and motion capture against
 // what straight runs, turns in place and sideways runs must give, and the controller's limits.
 

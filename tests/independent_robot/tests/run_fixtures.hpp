@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Quiet runs, step tours and row lookups shared by the generator's tests.
 

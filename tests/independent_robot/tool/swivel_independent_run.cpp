@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-independent-run: writes a "measured" run log and the nominal robot model of a robot
 // simulated independently of Swivel's own simulator, either a battery case or a run built
 // from the command line. Exit codes: 0 done, 1 a file could not be written, 2 usage error.

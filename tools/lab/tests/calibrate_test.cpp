@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `swivel-lab calibrate` end to end: logs from `swivel-lab simulate --trajectory calibration`
 // in, a calibrated robot model out, or a refusal with its reason.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `swivel-lab reproduce docent --short` end to end: the real executable prints the paper's
 // tables, writes its files, and its numbers pass sanity checks that a broken pipeline fails.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `swivel-lab reproduce square --short`: calibrated parameters must track the square better
 // than the design values, the statistics and both plots must be written, and the figures
 // must not depend on how many jobs ran them. One short lap per direction lets slip and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `swivel-lab simulate` end to end: the real executable writes logs that the reader accepts.
 
 #include <gtest/gtest.h>

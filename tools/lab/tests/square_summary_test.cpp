@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The statistics of a Table 5 study on made-up runs whose figures can be worked out by hand.
 
 #include "square_summary.hpp"

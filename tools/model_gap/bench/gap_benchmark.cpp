@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The model-gap workflow on data it did not make: runs of the independent generator
 // (tests/independent_robot), analysed as a user would.
 //   swivel-bench-model-gap                  wall time on a 120 s run of each robot

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Scoring the model-gap workflow on the independent battery (tests/independent_robot): each
 // case's run is generated, analysed as a user would (its run log and nominal model read

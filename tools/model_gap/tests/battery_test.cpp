@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The representative subset of the independent battery (tests/independent_robot): runs the
 // workflow did not make, from a robot it does not simulate, judged by the same rules as
 // `swivel-bench-model-gap --battery` (battery_scoring.hpp). The whole battery is the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Measured-style runs for the model-gap tests and benchmark: a robot whose true model
 // carries hidden effects, driven by a controller that uses the nominal model, recorded with

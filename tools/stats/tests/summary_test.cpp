@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Summary statistics against values worked out by hand.
 
 #include "swivel/stats/summary.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What every Swivel executable does with its command line: `--version`, and exit code 2 on a
 // usage error (an unknown option, a missing or malformed argument), as POSIX utilities do,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Typed, validated access to one YAML mapping, used by the daemon configuration, the robot
 // model and every plugin's `params:`. Each getter records the key as known; finish()

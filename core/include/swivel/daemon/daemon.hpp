@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's wiring: plugins from the configuration, the real-time loop, the command
 // source, the DDS bridge, the systemd notifications, configuration reload (file watcher,

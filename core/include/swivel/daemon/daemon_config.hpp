@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's configuration file (config/swiveld.yaml), read and validated in full before
 // anything starts. Start-up code: throws ConfigError naming file:line:column and key.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The daemon's DDS side. A publisher thread reads the loop's newest state snapshot at the
 // publish rate and writes RobotState, ModuleStates (and, with ROS 2 enabled, odometry, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `dds:` section of swiveld.yaml. Start-up code: throws ConfigError.
 

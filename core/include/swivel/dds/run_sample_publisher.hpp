@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Publishes the loop's run samples (swivel/rt/run_sample.hpp) on swivel_run_samples: every
 // sample, in order, for `swivelctl record`. A thread of its own takes them from the loop's

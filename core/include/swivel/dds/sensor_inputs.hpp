@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Sensors from ROS 2 drivers over DDS (README "External sensors"): the gyro from a
 // sensor_msgs/Imu topic, rotated from the IMU's mounting into the body frame, and motion

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Topic names, default QoS and participant creation shared by the daemon's bridge, swivelctl
 // and the tests. Types are the C types idlc generates from core/idl/swivel.idl ("swivel.h")

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Velocity, acceleration and jerk limits on a commanded body twist: what a robot's own
 // motion controller enforces (the robot model's `limits:`). The daemon applies it on the

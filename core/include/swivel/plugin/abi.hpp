@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Real-time methods of the plugin interfaces (read, write, forward, inverse, update,
 // hand_over) must not allocate or throw; implementations declare them noexcept. The base

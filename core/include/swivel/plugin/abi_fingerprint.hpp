@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The layout fingerprint of the plugin ABI (abi.hpp): every type that crosses the boundary
 // between swiveld and a plugin, with its size and alignment as the including translation

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Calibration plugin: a procedure that the real-time loop runs instead of the velocity path
 // (LoopMode::kCalibration). Each cycle step() turns the readings into actuator setpoints,

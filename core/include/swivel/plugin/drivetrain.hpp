@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Drivetrain plugin: forward kinematics (odometry) and inverse kinematics (setpoints).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Hardware plugin: sensor readings in, actuator setpoints out.
 //

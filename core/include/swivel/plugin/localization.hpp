@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Localization plugin: pose (and covariance) from odometry increments, gyro and, where a
 // source provides them, absolute pose fixes (HardwareState::motion_capture).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ROS time for stamps taken on the loop's clock. The loop stamps everything with
 // CLOCK_MONOTONIC (steady, never stepped); ROS stamps are the system realtime clock

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The real-time loop (docs/architecture.md "One cycle of the loop"). One thread at a fixed period runs:
 // hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Sensors that reach the loop from outside the hardware plugin (a ROS 2 IMU or motion-capture
 // driver over DDS): the gyro sample the loop takes through a lock-free ring, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Latest value for exactly one producer thread and one consumer thread: a triple buffer.
 // The producer always writes into a slot of its own and publishes it by exchanging its index

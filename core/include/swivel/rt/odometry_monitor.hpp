@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Sustained-disagreement check on the odometry (docs/faults.md, "Frozen encoder"). Two
 // independent views of the motion are compared every cycle, each low-pass filtered so that

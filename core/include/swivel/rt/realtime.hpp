@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Operating-system set-up for a real-time thread: SCHED_FIFO, locked memory, CPU wake-up
 // latency, and absolute-time sleeping on CLOCK_MONOTONIC. Where the system refuses, the

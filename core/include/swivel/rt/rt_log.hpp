@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Logging from the real-time loop without formatting on it: the loop pushes fixed-size
 // records into an SPSC ring; a logger thread drains them and formats them through spdlog.

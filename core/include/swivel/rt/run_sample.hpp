@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the real-time loop hands out for recording a run: one RunSample every
 // LoopOptions::run_sample_rate_hz, through a lock-free SPSC ring (ControlLoop::take_run_sample()),

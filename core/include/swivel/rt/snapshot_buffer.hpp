@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Latest-value buffer: one writer publishes, any number of readers copy the newest value.
 // A sequence lock whose payload is stored as 64-bit atomic words (release stores, acquire

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Bounded lock-free ring for exactly one producer thread and one consumer thread. Storage is
 // inline (no allocation); elements are copied in and out, so they must be trivially copyable.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the real-time loop publishes every cycle (into a lock-free snapshot buffer) and
 // what it accepts (through lock-free rings). Trivially copyable by construction.

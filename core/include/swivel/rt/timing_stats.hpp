@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Loop timing statistics: fixed-bucket histograms of wake-up lateness and cycle time plus an
 // overrun counter. The loop records with relaxed atomics and never allocates; any thread may

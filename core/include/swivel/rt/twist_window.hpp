@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The body twist the loop publishes, estimated over a short window of readings instead of
 // one cycle's encoder difference (which, at a few counts per cycle, is mostly quantization).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The systemd notification protocol (sd_notify(3)) spoken directly on $NOTIFY_SOCKET, so
 // that the daemon needs no libsystemd: READY=1, RELOADING=1, STOPPING=1, WATCHDOG=1 and

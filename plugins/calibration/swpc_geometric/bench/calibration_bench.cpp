@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Timing of the calibration: one full robot calibration (all modules), and the Monte Carlo
 // per trial (generation + calibration).
 #include <benchmark/benchmark.h>

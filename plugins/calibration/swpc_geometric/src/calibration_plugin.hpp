@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `swpc_geometric` calibration plugin: a thin adapter that reads its parameters, runs the
 // calibration procedure of docs/methods.md §1 (calibration_procedure.hpp, the same state machine

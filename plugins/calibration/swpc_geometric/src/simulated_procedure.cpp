@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/calibration/simulated_procedure.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Calibration logs in, calibrated model out.
 
 #include "swivel/calibration/calibration_io.hpp"

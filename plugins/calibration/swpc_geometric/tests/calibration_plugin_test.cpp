@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The swpc_geometric plugin run the way the daemon runs it: the real loop (run_cycle on
 // synthetic time), the sim and swpc plugins loaded through PluginLoader on
 // config/robots/swpc4.yaml, a simulated world whose true parameters differ from the nominal

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/calibration/monte_carlo.hpp"
 
 #include <gtest/gtest.h>

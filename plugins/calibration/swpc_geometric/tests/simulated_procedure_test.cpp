@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's calibration procedure run offline on the simulated world, end to end.
 
 #include "swivel/calibration/simulated_procedure.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/calibration/swpc_calibration.hpp"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Random robots for the calibration tests: N modules spread around a circle, parameters
 // perturbed like the paper's Monte Carlo.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `reproduce calibration-mc`: the paper's Table 3 Monte Carlo as a command-line subcommand,
 // ready to be registered under any CLI11 `reproduce` command (swivel-lab's included).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `differential` drivetrain plugin: a thin adapter between the loop's HardwareState /
 // ActuatorCommand and swivel/differential/differential_kinematics.hpp. Module 0 is the left

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/differential/differential_kinematics.hpp"
 
 #include <gtest/gtest.h>

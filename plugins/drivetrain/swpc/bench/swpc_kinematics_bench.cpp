@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-cycle cost of the SWPC kinematics: what the drivetrain's inverse() computes (one
 // inverse per module, desaturation, the near-zero speed measure) and one least-squares
 // forward fit.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `swpc` drivetrain plugin: a thin adapter between the loop's HardwareState /
 // ActuatorCommand and the kinematics of swivel/swpc/swpc_kinematics.hpp. It converts the

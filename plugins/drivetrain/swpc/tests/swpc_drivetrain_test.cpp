@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swpc_drivetrain.hpp"
 
 #include <dlfcn.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `dynamixel` hardware plugin: wheels (and SWPC steering) driven by DYNAMIXEL X-series
 // servos on one Protocol 2.0 bus. Configuration: README.md in this folder.

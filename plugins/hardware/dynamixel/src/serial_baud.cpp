@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // termios2 lives in the kernel headers, which clash with glibc's <termios.h>: this file
 // includes only the former.
 #include <asm/ioctls.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The serial port and the bus transactions against the emulated servos on a pty: the happy
 // path, motion under goals, and each injectable fault as the host sees it.
 

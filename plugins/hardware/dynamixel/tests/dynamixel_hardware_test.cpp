@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The dynamixel hardware plugin in-process against the emulated bus: configuration errors,
 // driving both robot kinds, each fault stopping the robot with the servo named, torque off
 // on deactivate, and read()/write() free of heap use.

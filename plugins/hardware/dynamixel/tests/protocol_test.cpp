@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Protocol 2.0 framing against the example packets of ROBOTIS's Protocol 2.0 description,
 // byte stuffing both ways, the parser's resynchronisation and CRC rejection.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // swivel-dxl-emulator: a DYNAMIXEL X-series bus on a pseudo-terminal, for trying the
 // `dynamixel` hardware plugin without servos.
 //

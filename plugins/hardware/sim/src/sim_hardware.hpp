@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `sim` hardware plugin: a thin adapter that runs a sim::World on the daemon's clock.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibration motion of docs/methods.md §1 in the simulated world.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // step() and read() of the world and of the plugin run on the real-time loop: no heap.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `sim` plugin's fault injection (params `faults:` and the run-time hook): each kind
 // changes exactly the reading or call it names, for exactly its window.
 

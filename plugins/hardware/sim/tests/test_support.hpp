@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Shared helpers of the simulator tests: robot models built in code and dead reckoning
 // through the kinematics libraries' forward functions.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `kalman` localization plugin. mode: ekf (default) runs PoseEkf (pose + gyro bias,
 // gyro and motion-capture updates); mode: lcakf runs the paper's LCAKF on E/G positions.

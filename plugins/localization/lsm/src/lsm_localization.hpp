@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `lsm` localization plugin: E/G dead reckoning compensated by LCALSM
 // (swivel/localization/lcalsm.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "swivel/localization/eg_params.hpp"
 
 #include <cmath>

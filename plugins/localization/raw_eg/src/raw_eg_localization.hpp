@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `raw_eg` localization plugin: E/G dead reckoning (swivel/localization/eg_odometry.hpp)
 // behind the Localization interface, with its covariance propagated by the E/G noise model

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EgCovariance against closed forms of its noise model.
 
 #include "swivel/localization/eg_covariance.hpp"

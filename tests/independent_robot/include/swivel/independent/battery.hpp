@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The battery: named runs with known answers for benchmarking the model-gap workflow.
 // Ids read "<robot>/<effect>/<small|large>", "<robot>/clean/<n>",

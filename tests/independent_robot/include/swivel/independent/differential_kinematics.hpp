@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Differential-drive kinematics (docs/methods.md §2, eq. (1)-(4)), written for this generator
 // alone: the robot's controller uses the inverse with the nominal geometry, the true robot

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The generator's entry point: a run spec in, a measured run log and the nominal model out.
 

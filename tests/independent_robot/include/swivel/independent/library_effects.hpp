@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The model-gap workflow's effect library, by name: setting the true robot's effects from
 // "NAME.PARAM=VALUE" and listing what a correct workflow should name for a run.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The two robots as their nominal model files describe them: what the controller knows and
 // what the true robot is before any effect is applied.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Effects outside the model-gap library, set from "NAME.PARAM=VALUE":
 //

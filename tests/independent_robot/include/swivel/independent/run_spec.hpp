@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Everything that defines one generated run: which robot, what it truly is (the library
 // effects and the effects outside the library), the noise, the tour and the seed. The

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The true robot, its controller and its sensors, run over a tour: one row per log sample,
 // every value taken at that row's own time.

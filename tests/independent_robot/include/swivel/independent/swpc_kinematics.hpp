@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Kinematics of single-wheel powered casters (docs/methods.md §1), written for this generator
 // alone. Conventions: steering-axis velocity v_s = (vx - w y, vy + w x); wheel heading

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Tours: the user's body-twist setpoint as a function of time. The standard tour of each
 // robot is drawn from the run's seed so that every library effect shows: it stands still

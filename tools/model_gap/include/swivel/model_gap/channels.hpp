@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The two questions the workflow answers and the channels that answer them. A channel is
 // compared window by window (windows.hpp): the change of a measured quantity over a window

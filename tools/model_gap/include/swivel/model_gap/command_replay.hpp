@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The command-to-motion replay: the logged commands driven through the robot's controller
 // (the nominal geometry it knows, the limits of the model under test) into the simulator's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Non-linear least squares over a handful of effect parameters (Ceres), with a parameter
 // covariance that stays honest when residuals are correlated in time: the sandwich

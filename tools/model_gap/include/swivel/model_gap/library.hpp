@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The candidates the workflow fits, per question, and how each one's parameters are fitted
 // and written into a robot model. What the effects do to the world is defined once, in the

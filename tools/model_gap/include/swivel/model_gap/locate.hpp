@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Motion phases of a run from its commands (standing, straight, turning, accelerating), for
 // the report: where the robot was doing what. Where and how a residual grows is found per

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Tests for a residual that no library effect accounts for, run on what is left after the
 // selected effects: a residual that still grows with time, with the motion or with the

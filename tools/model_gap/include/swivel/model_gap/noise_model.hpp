@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The noise of each channel's window residuals, estimated from the run itself: a variance
 // a + b x per window, where x is the square of how far the wheels (or the steering) turned

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One question of the workflow, decided on its own: fit the question's candidates to its
 // window residuals, select effects by forward steps (the best single effect, then a second

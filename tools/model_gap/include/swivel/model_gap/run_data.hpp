@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A run (swivel/run_log.hpp) as columns, the shape the replay and the analysis work on.
 

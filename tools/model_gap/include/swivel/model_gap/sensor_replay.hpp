@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The sensor-to-pose replay: dead reckoning from the logged encoders, steering angles and
 // gyro through the drivetrain's kinematics library and the E/G odometry of the raw_eg

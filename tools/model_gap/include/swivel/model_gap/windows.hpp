@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Windows of a run: consecutive stretches of about a second over which measured and
 // predicted changes are compared. Comparing changes instead of values whitens the noise of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The model-gap workflow (tools/lab/GAP.md), as two questions decided separately:
 //   1. sensor to pose: dead reckoning from the measured encoders, steering and gyro against

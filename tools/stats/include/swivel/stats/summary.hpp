@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Summary statistics of repeated simulated experiments: the mean with its standard error,
 // the spread, and the relative change between two independent means (what the papers'

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Recorded data in, robot model out: turns calibration run logs (swivel/run_log.hpp) into
 // the calibration's input, and a calibration result into a calibrated robot model. Not

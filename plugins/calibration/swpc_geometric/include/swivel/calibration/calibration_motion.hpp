@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Exact geometric model of the calibration motion of docs/methods.md §1, for tests and the Monte
 // Carlo: the robot turns rigidly about the wheel contact point of one locked module while

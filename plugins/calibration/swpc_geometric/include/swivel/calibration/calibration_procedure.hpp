@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The calibration procedure of docs/methods.md §1 as a state machine stepped once per control
 // cycle: what the daemon's `swpc_geometric` plugin runs on the real-time loop and what the

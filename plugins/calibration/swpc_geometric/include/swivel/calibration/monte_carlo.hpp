@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Monte Carlo check of the calibration (the paper's Table 3): random true parameters around
 // a design, the exact calibration motion, calibration, mean absolute errors.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The calibration of docs/methods.md §1 on the simulated world, offline: the daemon's procedure
 // (calibration_procedure.hpp, the state machine its `swpc_geometric` plugin runs) stepped

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Geometric kinematic calibration of a robot on N single-wheel powered casters
 // (docs/methods.md §1): from motion capture and encoder data recorded while the robot turns about

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Kinematics of the differential-drive (docent) robot, docs/methods.md §2 eq. (1)-(6).
 // Plain maths: no threads, no YAML. Real-time safe (no allocation, noexcept).

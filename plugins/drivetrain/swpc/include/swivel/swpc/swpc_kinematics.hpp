@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Kinematics of a robot on N single-wheel powered casters (docs/methods.md §1).
 // Conventions: steering-axis velocity v_s = (vx - w y_i, vy + w x_i); wheel heading

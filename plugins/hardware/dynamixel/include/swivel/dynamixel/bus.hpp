@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Transactions on a Protocol 2.0 bus: an instruction out, the status packet(s) back within a
 // timeout. Not real-time (it waits on the port); run by the plugin's bus thread and off the

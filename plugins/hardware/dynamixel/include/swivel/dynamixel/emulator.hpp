@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A DYNAMIXEL X-series bus emulated on a pseudo-terminal, for tests and benches: open
 // port() with SerialPort (or point a `dynamixel` plugin at it) and talk Protocol 2.0.

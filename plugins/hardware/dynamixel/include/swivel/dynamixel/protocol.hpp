@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // DYNAMIXEL Protocol 2.0: packet framing, CRC, instruction builders and a status-packet
 // parser. Plain code: no I/O, no allocation, no exceptions; every function is real-time safe.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A serial port in raw mode (8N1, no flow control, no echo, no line processing) at any baud
 // rate: the standard termios rates through cfsetspeed, any other rate (e.g. 3 Mbps on an

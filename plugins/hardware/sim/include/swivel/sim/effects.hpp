@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The library of named effects (README "Configuration reference: robot model", `effects:`): small, documented
 // extensions of a robot model that the simulated world applies on top of the model's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Open-loop driving of a simulated robot: a controller that turns body twists into actuator
 // setpoints with the NOMINAL model's inverse kinematics (the drivetrain libraries), the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated world: a robot that moves with its TRUE model (parameters plus named
 // effects, see effects.hpp) while whoever commands it uses a nominal model, so that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LCAKF of docs/methods.md §2: a linear Kalman filter on the position coordinates, fed with the
 // E/G positions as measurements. The paper gives no model; this one is a constant-velocity

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Extended Kalman filter over (x, y, yaw, gyro_bias) driven by a drivetrain's odometry
 // increment, with the gyro and optional absolute pose fixes as measurements.

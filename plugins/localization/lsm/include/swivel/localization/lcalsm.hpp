@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LCALSM of docs/methods.md §2: least-squares line compensation of stored E/G positions.
 // Plain maths: no threads, no YAML, fixed-capacity storage (no allocation); every method

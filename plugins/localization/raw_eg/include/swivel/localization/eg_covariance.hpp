@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The uncertainty of E/G dead reckoning (eg_odometry.hpp): a first-order propagation of the
 // error in (x, y, yaw, b), b the gyro bias left after the nominal correction (rad/s of true

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // E/G (encoder/gyro) dead reckoning of docs/methods.md §2 eq. (1)-(6), driven by a drivetrain's
 // odometry increment so that it serves the differential robot and the holonomic SWPC

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The E/G settings every localization plugin reads alike: `heading_source` from its own
 // params, the gyro's scale and bias (eq. (7)) from the robot model's `sensors.gyro`.
