@@ -8,11 +8,10 @@
 //     plugin: wheel_odometry
 //     params: {distance_scale: 1.0}
 
+#include <cmath>
 #include <swivel/config/param_reader.hpp>
 #include <swivel/plugin/localization.hpp>
 #include <swivel/pose_math.hpp>
-
-#include <cmath>
 
 namespace example {
 

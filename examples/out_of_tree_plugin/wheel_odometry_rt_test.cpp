@@ -2,13 +2,13 @@
 // The plugin's real-time methods, 100 000 cycles under Swivel's allocation guard: no heap
 // operation may happen on the loop thread. Also checks that the odometry is integrated.
 
-#include <swivel/plugin/localization.hpp>
-#include <swivel/testing/alloc_guard.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <swivel/plugin/localization.hpp>
+#include <swivel/testing/alloc_guard.hpp>
 
 namespace example {
 swivel::Localization* make_wheel_odometry();
@@ -43,10 +43,11 @@ int main() {
     counts = counter.counts();
   }
   const double x = plugin->estimate().pose.x_m;
-  std::printf("%llu allocations, %llu deallocations over 100000 cycles and a hand-over; "
-              "travelled %.6f m (expected 30), x after the hand-over %.3f (expected 1)\n",
-              static_cast<unsigned long long>(counts.allocations),
-              static_cast<unsigned long long>(counts.deallocations), travelled_m, x);
+  std::printf(
+      "%llu allocations, %llu deallocations over 100000 cycles and a hand-over; "
+      "travelled %.6f m (expected 30), x after the hand-over %.3f (expected 1)\n",
+      static_cast<unsigned long long>(counts.allocations),
+      static_cast<unsigned long long>(counts.deallocations), travelled_m, x);
   if (counts.allocations != 0 || counts.deallocations != 0) return 1;
   if (std::abs(travelled_m - 30.0) > 1e-6) return 3;
   return std::abs(x - 1.0) < 1e-12 ? 0 : 3;

@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+#include "swivel/daemon/daemon_config.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -6,7 +8,6 @@
 #include <string>
 
 #include "swivel/config/config_error.hpp"
-#include "swivel/daemon/daemon_config.hpp"
 
 namespace swivel::daemon {
 namespace {
@@ -46,7 +47,8 @@ class DaemonConfigTest : public testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::path(testing::TempDir()) /
-           ("swivel_config_" + std::string(testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("swivel_config_" +
+            std::string(testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::create_directories(dir_ / "robots");
     fs::copy_file(fs::path(SWIVEL_SOURCE_DIR) / "config/robots/docent.yaml",
                   dir_ / "robots/docent.yaml", fs::copy_options::overwrite_existing);
@@ -160,8 +162,9 @@ TEST_F(DaemonConfigTest, TwistWindowIsReadAndBoundedByTheLoopPeriod) {
 }
 
 TEST_F(DaemonConfigTest, CalibrationSectionIsOptionalAndValidated) {
-  const std::string with = replaced(
-      kValid, "command:\n", "calibration:\n  plugin: swpc_geometric\n  params: {rotation_deg: 120}\ncommand:\n");
+  const std::string with =
+      replaced(kValid, "command:\n",
+               "calibration:\n  plugin: swpc_geometric\n  params: {rotation_deg: 120}\ncommand:\n");
   const DaemonConfig c = load(with);
   ASSERT_TRUE(c.has_calibration());
   EXPECT_EQ(c.calibration.plugin, "swpc_geometric");

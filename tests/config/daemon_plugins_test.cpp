@@ -62,12 +62,14 @@ TEST(DaemonPlugins, ConfigureErrorOfAPluginNamesItsParamKey) {
   const std::string error = error_of<ConfigError>(
       "hardware: {plugin: sim}\ndrivetrain: {plugin: differential}\n"
       "localization:\n  plugin: throws_configure\n  params:\n    gain: 2\n");
-  EXPECT_EQ(error, "swiveld.yaml:8:5: localization.params.gain: expected a number in [0, 1], got 2");
+  EXPECT_EQ(error,
+            "swiveld.yaml:8:5: localization.params.gain: expected a number in [0, 1], got 2");
 }
 
 TEST(DaemonPlugins, ValidConfigurationConfiguresEveryPlugin) {
-  Daemon daemon(config_with("hardware: {plugin: sim}\ndrivetrain: {plugin: differential}\n"
-                            "localization: {plugin: good, params: {start_x_m: 1.0}}\n"));
+  Daemon daemon(
+      config_with("hardware: {plugin: sim}\ndrivetrain: {plugin: differential}\n"
+                  "localization: {plugin: good, params: {start_x_m: 1.0}}\n"));
   EXPECT_EQ(daemon.config().localization.plugin, "good");
   EXPECT_EQ(daemon.loop(), nullptr) << "nothing runs before start()";
 }

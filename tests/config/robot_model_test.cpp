@@ -176,8 +176,10 @@ TEST(RobotModel, RejectsUnknownDrivetrain) {
 
 TEST(RobotModel, RejectsSwpcWithOneModule) {
   std::string text = kSwpc;
-  text.erase(text.find("    - {x_m: -0.215"), text.find("sensors:") - text.find("    - {x_m: -0.215"));
-  EXPECT_EQ(error_of(text), "robot.yaml:4:3: swpc.modules: expected between 2 and 16 modules, got 1");
+  text.erase(text.find("    - {x_m: -0.215"),
+             text.find("sensors:") - text.find("    - {x_m: -0.215"));
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:4:3: swpc.modules: expected between 2 and 16 modules, got 1");
 }
 
 TEST(RobotModel, RejectsUnknownKeyInModule) {

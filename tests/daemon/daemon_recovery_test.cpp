@@ -200,8 +200,7 @@ TEST(DaemonLifecycle, HardwareThatRefusesToActivateStopsTheStart) {
 
 TEST(DaemonRequests, SetPoseGoesThroughTheActiveLocalizationOrIsRefusedWithItsReason) {
   DaemonFiles files("set_pose");
-  Daemon daemon(load_daemon_config(files.write("{plugin: sim}", "{plugin: raw_eg}")),
-                in_process());
+  Daemon daemon(load_daemon_config(files.write("{plugin: sim}", "{plugin: raw_eg}")), in_process());
   daemon.start();
   dds::SetPoseSample pose;
   pose.request_id = 12;
@@ -210,8 +209,9 @@ TEST(DaemonRequests, SetPoseGoesThroughTheActiveLocalizationOrIsRefusedWithItsRe
   EXPECT_TRUE(reply.ok) << reply.text;
   EXPECT_EQ(reply.request_id, 12U);
   EXPECT_EQ(reply.verb, "set_pose");
-  EXPECT_EQ(reply.text, "pose set to x=2.000 m y=-1.000 m yaw=0.500 rad, uncertainty kept "
-                        "(localization raw_eg)");
+  EXPECT_EQ(reply.text,
+            "pose set to x=2.000 m y=-1.000 m yaw=0.500 rad, uncertainty kept "
+            "(localization raw_eg)");
   const Pose2 now = daemon.loop()->latest().estimate.pose;
   EXPECT_NEAR(now.x_m, 2.0, 1e-6);  // standing still
   EXPECT_NEAR(now.y_m, -1.0, 1e-6);
@@ -232,21 +232,22 @@ TEST(DaemonRequests, SetPoseGoesThroughTheActiveLocalizationOrIsRefusedWithItsRe
   pose.pose.has_covariance = false;
   reply = refusing.set_pose(pose);
   EXPECT_FALSE(reply.ok);
-  EXPECT_EQ(reply.text, "refused by localization 'refuses_hand_over': no map to place the pose "
-                        "in (planted refusal)");
+  EXPECT_EQ(reply.text,
+            "refused by localization 'refuses_hand_over': no map to place the pose "
+            "in (planted refusal)");
   EXPECT_EQ(refusing.loop()->latest().fault, FaultCode::kNone);
 }
 
 TEST(DaemonRequests, ClearWithNothingToClearAndUnknownRequestsAreAnswered) {
   DaemonFiles files("answers");
-  Daemon daemon(load_daemon_config(files.write("{plugin: sim}", "{plugin: raw_eg}")),
-                in_process());
+  Daemon daemon(load_daemon_config(files.write("{plugin: sim}", "{plugin: raw_eg}")), in_process());
   daemon.start();
   EXPECT_EQ(daemon.handle_request(request("clear", 1)).text, "nothing to clear");
   const dds::ReplySample unknown = daemon.handle_request(request("reboot", 2));
   EXPECT_FALSE(unknown.ok);
-  EXPECT_EQ(unknown.text, "refused: unknown request 'reboot' (reload, clear, calibrate; a pose "
-                          "goes to swivel_set_pose)");
+  EXPECT_EQ(unknown.text,
+            "refused: unknown request 'reboot' (reload, clear, calibrate; a pose "
+            "goes to swivel_set_pose)");
   const dds::ReplySample calibrate = daemon.handle_request(request("calibrate", 3));
   EXPECT_FALSE(calibrate.ok);
   EXPECT_EQ(calibrate.text.rfind("refused: robot 'docent' has a differential drivetrain", 0), 0U)

@@ -32,9 +32,7 @@ DaemonConfig edited(const std::string& from, const std::string& to) {
   return parse_daemon_config(text, "swiveld.yaml", kConfigDir);
 }
 
-DaemonConfig shipped() {
-  return parse_daemon_config(shipped_text(), "swiveld.yaml", kConfigDir);
-}
+DaemonConfig shipped() { return parse_daemon_config(shipped_text(), "swiveld.yaml", kConfigDir); }
 
 const std::string kModel = "name: docent\n";
 

@@ -1,6 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "swivel/dds/bridge.hpp"
-
 #include <gtest/gtest.h>
 #include <time.h>
 
@@ -15,6 +13,7 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/clock.hpp"
+#include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
@@ -64,8 +63,7 @@ struct Client {
   Client() : participant({0, tool_config_uri()}) {}
 
   template <typename T>
-  dds_entity_t reader(const dds_topic_descriptor_t* desc, const std::string& name,
-                      int depth = 10) {
+  dds_entity_t reader(const dds_topic_descriptor_t* desc, const std::string& name, int depth = 10) {
     const dds_entity_t topic = create_topic(participant.handle(), desc, name.c_str());
     const QosPtr qos = default_qos(depth);
     return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr), "reader");
@@ -94,13 +92,15 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   swivel_msg_RobotState got{};
   std::string id, plugin, fault, detail;
   ASSERT_TRUE(wait_for([&] {
-    return take_one<swivel_msg_RobotState>(state_reader, [&](const swivel_msg_RobotState& s) {
-             got = s;
-             id = s.robot_id;
-             plugin = s.localization_plugin;
-             fault = s.fault_text;
-             detail = s.fault_detail;
-           }) && id == robot;
+    return take_one<swivel_msg_RobotState>(state_reader,
+                                           [&](const swivel_msg_RobotState& s) {
+                                             got = s;
+                                             id = s.robot_id;
+                                             plugin = s.localization_plugin;
+                                             fault = s.fault_text;
+                                             detail = s.fault_detail;
+                                           }) &&
+           id == robot;
   })) << "no RobotState within 10 s";
   EXPECT_GT(got.cycle, 0u);
   EXPECT_NEAR(got.stamp_s, swivel::monotonic_s(), 5.0);
@@ -170,11 +170,12 @@ TEST(DdsBridge, PassesVelocityCommandsForThisRobotOnly) {
   std::vector<VelocityCommand> received;
   DdsBridge bridge({}, robot,
                    {.read_state = [&](StateSnapshot& s) { return loop.read(s); },
-                    .on_command = [&](const VelocityCommand& c) {
-                      const std::scoped_lock lock(mutex);
-                      received.push_back(c);
-                      return true;
-                    }});
+                    .on_command =
+                        [&](const VelocityCommand& c) {
+                          const std::scoped_lock lock(mutex);
+                          received.push_back(c);
+                          return true;
+                        }});
   bridge.start();
   Client client;
   const dds_entity_t writer =
@@ -243,10 +244,11 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
                           captures.push_back(m);
                           return true;
                         },
-                    .on_request = [&](const RequestSample& r) {
-                      const std::scoped_lock lock(mutex);
-                      requests.push_back(r);
-                    }});
+                    .on_request =
+                        [&](const RequestSample& r) {
+                          const std::scoped_lock lock(mutex);
+                          requests.push_back(r);
+                        }});
   bridge.start();
   Client client;
   const dds_entity_t mocap = client.writer(&swivel_msg_MotionCapture_desc, kMotionCaptureTopic);
@@ -296,10 +298,11 @@ TEST(DdsBridge, DeliversSetPoseAndPublishesItsReply) {
   std::vector<SetPoseSample> poses;
   DdsBridge bridge({}, robot,
                    {.read_state = [&](StateSnapshot& s) { return loop.read(s); },
-                    .on_set_pose = [&](const SetPoseSample& p) {
-                      const std::scoped_lock lock(mutex);
-                      poses.push_back(p);
-                    }});
+                    .on_set_pose =
+                        [&](const SetPoseSample& p) {
+                          const std::scoped_lock lock(mutex);
+                          poses.push_back(p);
+                        }});
   bridge.start();
   Client client;
   const dds_entity_t writer = client.writer(&swivel_msg_SetPose_desc, kSetPoseTopic);
@@ -384,14 +387,16 @@ TEST(DdsBridge, PublishesDiagnostics) {
   swivel_msg_Diagnostics got{};
   std::string id, plugin, reload, fault, detail;
   ASSERT_TRUE(wait_for([&] {
-    return take_one<swivel_msg_Diagnostics>(reader, [&](const swivel_msg_Diagnostics& m) {
-             got = m;
-             id = m.robot_id;
-             plugin = m.localization_plugin;
-             reload = m.last_reload_result;
-             fault = m.fault_text;
-             detail = m.fault_detail;
-           }) && id == robot;
+    return take_one<swivel_msg_Diagnostics>(reader,
+                                            [&](const swivel_msg_Diagnostics& m) {
+                                              got = m;
+                                              id = m.robot_id;
+                                              plugin = m.localization_plugin;
+                                              reload = m.last_reload_result;
+                                              fault = m.fault_text;
+                                              detail = m.fault_detail;
+                                            }) &&
+           id == robot;
   })) << "no Diagnostics within 10 s";
   EXPECT_DOUBLE_EQ(got.loop_rate_hz, 1000.0);
   EXPECT_DOUBLE_EQ(got.lateness.p99_us, 40.0);

@@ -64,13 +64,13 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   nav_msgs_msg_dds__Odometry_ odom{};
   std::string frame, child_frame;
   ASSERT_TRUE(wait_for([&] {
-    return take_one<nav_msgs_msg_dds__Odometry_>(reader,
-                                                 [&](const nav_msgs_msg_dds__Odometry_& o) {
-                                                   odom = o;
-                                                   frame = o.header.frame_id;
-                                                   child_frame = o.child_frame_id;
-                                                 });
-  })) << "no odometry on rt/" << ns << "/odom within 10 s";
+    return take_one<nav_msgs_msg_dds__Odometry_>(reader, [&](const nav_msgs_msg_dds__Odometry_& o) {
+      odom = o;
+      frame = o.header.frame_id;
+      child_frame = o.child_frame_id;
+    });
+  })) << "no odometry on rt/"
+      << ns << "/odom within 10 s";
   EXPECT_EQ(frame, "odom");
   EXPECT_EQ(child_frame, "base_link");
   // The snapshot's ROS time, mapped by the loop from its monotonic stamp (rt::ClockOffset).
@@ -105,8 +105,7 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   dds_instance_handle_t publications[4];
   const dds_return_t n = dds_get_matched_publications(reader, publications, 4);
   ASSERT_EQ(n, 1);
-  dds_builtintopic_endpoint_t* endpoint =
-      dds_get_matched_publication_data(reader, publications[0]);
+  dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, publications[0]);
   ASSERT_NE(endpoint, nullptr);
   EXPECT_STREQ(endpoint->type_name, "nav_msgs::msg::dds_::Odometry_");
   EXPECT_EQ(std::string(endpoint->topic_name), "rt/" + ns + "/odom");
@@ -125,11 +124,12 @@ TEST(Ros2Compat, AcceptsCmdVelTwistFromReliableAndBestEffortPublishers) {
   std::vector<VelocityCommand> received;
   DdsBridge bridge(ros2_options(ns), "ros2_robot",
                    {.read_state = [](StateSnapshot&) { return false; },
-                    .on_command = [&](const VelocityCommand& c) {
-                      const std::scoped_lock lock(mutex);
-                      received.push_back(c);
-                      return true;
-                    }});
+                    .on_command =
+                        [&](const VelocityCommand& c) {
+                          const std::scoped_lock lock(mutex);
+                          received.push_back(c);
+                          return true;
+                        }});
   bridge.start();
   Participant client({0, tool_config_uri()});
   const dds_entity_t topic = create_topic(client.handle(), &geometry_msgs_msg_dds__Twist__desc,
@@ -169,10 +169,11 @@ TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
   std::vector<SetPoseSample> received;
   DdsBridge bridge(ros2_options(ns), "ros2_robot",
                    {.read_state = [](StateSnapshot&) { return false; },
-                    .on_set_pose = [&](const SetPoseSample& p) {
-                      const std::scoped_lock lock(mutex);
-                      received.push_back(p);
-                    }});
+                    .on_set_pose =
+                        [&](const SetPoseSample& p) {
+                          const std::scoped_lock lock(mutex);
+                          received.push_back(p);
+                        }});
   bridge.start();
   Participant client({0, tool_config_uri()});
   const dds_entity_t topic =
@@ -195,10 +196,10 @@ TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
   msg.pose.pose.position.y = -0.5;
   yaw_to_quaternion(0.8, msg.pose.pose.orientation.x, msg.pose.pose.orientation.y,
                     msg.pose.pose.orientation.z, msg.pose.pose.orientation.w);
-  msg.pose.covariance[0] = 0.25;       // x
-  msg.pose.covariance[7] = 0.16;       // y
-  msg.pose.covariance[35] = 0.0685;    // yaw
-  msg.pose.covariance[5] = 0.01;       // x-yaw
+  msg.pose.covariance[0] = 0.25;     // x
+  msg.pose.covariance[7] = 0.16;     // y
+  msg.pose.covariance[35] = 0.0685;  // yaw
+  msg.pose.covariance[5] = 0.01;     // x-yaw
   ASSERT_EQ(dds_write(writer, &msg), DDS_RETCODE_OK);
 
   ASSERT_TRUE(wait_for([&] {

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "dds_test_util.hpp"
-#include "swivel/clock.hpp"
 #include "ros2_interfaces.h"
+#include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/options.hpp"
 #include "swivel/dds/topics.hpp"

@@ -2,7 +2,6 @@
 // swivelctl as a user runs it: a separate process against daemons' bridges on the domain.
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
 #include <atomic>
@@ -10,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -45,7 +45,8 @@ RunResult swivelctl(const std::string& args) {
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
   char buffer[4096];
-  while (const std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) result.out.append(buffer, n);
+  while (const std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe))
+    result.out.append(buffer, n);
   const int status = ::pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   std::ifstream err(err_file);
@@ -239,8 +240,7 @@ TEST(Swivelctl, SetPoseSendsThePoseAndItsSigmas) {
   EXPECT_EQ(r.out, robot + ": set-pose: pose set\n");
   ASSERT_EQ(bare.exit_code, 0) << bare.err;
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.err.find("--sigma: standard deviations must be finite and >= 0"),
-            std::string::npos)
+  EXPECT_NE(bad.err.find("--sigma: standard deviations must be finite and >= 0"), std::string::npos)
       << bad.err;
   const auto poses = daemon.poses();
   ASSERT_EQ(poses.size(), 2u);

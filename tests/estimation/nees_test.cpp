@@ -89,12 +89,8 @@ std::string eg_noise() {
          ", bias_random_walk_radps_per_sqrt_s: 0.0";
 }
 
-std::string raw_eg_params() {
-  return "{" + eg_noise() + "}";
-}
-std::string lsm_params() {
-  return "{" + eg_noise() + "}";
-}
+std::string raw_eg_params() { return "{" + eg_noise() + "}"; }
+std::string lsm_params() { return "{" + eg_noise() + "}"; }
 // The gyro bias is the nominal one in this world (zero); the filter learns that while the
 // robot stands still.
 std::string kalman_params() {
@@ -209,9 +205,7 @@ TEST(Nees, RawEgCovarianceIsConsistent) {
   expect_consistent("raw_eg", run_seeds("raw_eg", raw_eg_params()));
 }
 
-TEST(Nees, LsmCovarianceIsConsistent) {
-  expect_consistent("lsm", run_seeds("lsm", lsm_params()));
-}
+TEST(Nees, LsmCovarianceIsConsistent) { expect_consistent("lsm", run_seeds("lsm", lsm_params())); }
 
 TEST(Nees, LsmHeadingAlignedCovarianceIsConsistent) {
   // On 1 m sides there is little lateral drift for its projection to remove; on long straight

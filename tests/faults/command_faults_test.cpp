@@ -92,7 +92,7 @@ TEST(CommandFaults, HugeCommandIsDesaturatedToTheActuatorLimitsOnSwpc) {
   RigOptions options;
   options.robot = "swpc4";
   options.drivetrain = "swpc";
-  FaultRig rig(options);  // max_wheel_rate_radps 40, max_steer_rate_radps 12 (defaults)
+  FaultRig rig(options);          // max_wheel_rate_radps 40, max_steer_rate_radps 12 (defaults)
   rig.drive(0.2, 0.0, 0.0, 200);  // casters aligned, moving
   for (int i = 0; i < 200; ++i) {
     rig.drive(1e9, -1e9, 1e9, 1);

@@ -97,7 +97,7 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
     rig.step(700);  // command timeout
     rig.command(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
     rig.step();
-    rig.drive(1e9, 0.0, 1e9, 50);  // desaturated
+    rig.drive(1e9, 0.0, 1e9, 50);     // desaturated
     for (int c = 1; c <= 100; ++c) {  // flood
       requested.store(c, std::memory_order_release);
       while (done.load(std::memory_order_acquire) < c) std::this_thread::yield();
@@ -118,8 +118,8 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
   quit.store(true, std::memory_order_release);
   producer.join();
 
-  EXPECT_EQ(counts.allocations, 0U) << "first allocation: " << counts.first_allocation_bytes
-                                    << " bytes";
+  EXPECT_EQ(counts.allocations, 0U)
+      << "first allocation: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0U);
   // The sequence went through its faults: five latched sensor/hardware faults, the encoder
   // jump, the frozen encoder and its catch-up jump, then a timeout, a rejected command and
@@ -133,8 +133,8 @@ TEST(FaultAllocations, WholeFaultSequenceAllocatesNothingOnTheLoopThread) {
   EXPECT_STREQ(last.localization_plugin.data(), "raw_eg");
   EXPECT_EQ(retired[0], kalman);
   EXPECT_EQ(retired[1], failing.get());
-  EXPECT_EQ(last.cycle, 500U + 500 + 200 + 5 * 200 + 200 + 700 + 200 + 700 + 1 + 50 + 100 + 100 +
-                            1 + 200);
+  EXPECT_EQ(last.cycle,
+            500U + 500 + 200 + 5 * 200 + 200 + 700 + 200 + 700 + 1 + 50 + 100 + 100 + 1 + 200);
 }
 
 // The recovery paths on the real plugins with motion limits on: a stall and its controlled
@@ -175,8 +175,8 @@ TEST(FaultAllocations, RecoveryWithMotionLimitsAllocatesNothingOnTheLoopThread) 
     counts = counter.counts();
   });
   loop_thread.join();
-  EXPECT_EQ(counts.allocations, 0U) << "first allocation: " << counts.first_allocation_bytes
-                                    << " bytes";
+  EXPECT_EQ(counts.allocations, 0U)
+      << "first allocation: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0U);
   EXPECT_FALSE(refused.ok);
   EXPECT_EQ(refused.fault, FaultCode::kHardwareError);

@@ -55,7 +55,7 @@ struct RigOptions {
   std::map<std::string, EffectParams> world_effects;
   double command_timeout_s = 0.5;
   rt::OdometryCheckOptions odometry_check;  ///< the loop's defaults unless a test says
-  MotionLimits limits;  ///< the loop's motion limits (none unless a test says)
+  MotionLimits limits;                      ///< the loop's motion limits (none unless a test says)
   /// The controlled stop's deceleration where `limits` has none (infinite: zero at once).
   double stop_linear_deceleration_mps2 = std::numeric_limits<double>::infinity();
   /// The published twist's window (the loop's default unless a test says).

@@ -291,13 +291,30 @@ TEST(SensorFaults, OdometryCheckKeepsQuietInNormalDriving) {
     std::vector<std::array<double, 4>> plan;  // vx, vy, wz, cycles
   };
   const std::vector<Run> runs = {
-      {"docent", "differential",
-       {{0.3, 0, 0, 1000}, {0, 0, 0, 300}, {0, 0, 1.0, 1000}, {0.5, 0, -0.8, 1000},
-        {-0.3, 0, 0, 500}, {1e9, 0, 1e9, 500}, {0, 0, -1e9, 500}, {1e9, 0, 0, 500}}},
-      {"swpc4", "swpc",
-       {{0.3, 0, 0, 1000}, {0, 0.3, 0, 1000}, {-0.3, 0, 0, 1000}, {0, -0.3, 0.5, 1000},
-        {0, 0, 1.0, 1000}, {0.3, 0.3, -0.5, 1000}, {1e9, -1e9, 1e9, 500}, {-1e9, 0, 0, 500},
-        {0, 1e9, 0, 500}, {0, 0, 0, 500}, {0.05, 0, 0, 500}, {0, 0.05, 0, 500},
+      {"docent",
+       "differential",
+       {{0.3, 0, 0, 1000},
+        {0, 0, 0, 300},
+        {0, 0, 1.0, 1000},
+        {0.5, 0, -0.8, 1000},
+        {-0.3, 0, 0, 500},
+        {1e9, 0, 1e9, 500},
+        {0, 0, -1e9, 500},
+        {1e9, 0, 0, 500}}},
+      {"swpc4",
+       "swpc",
+       {{0.3, 0, 0, 1000},
+        {0, 0.3, 0, 1000},
+        {-0.3, 0, 0, 1000},
+        {0, -0.3, 0.5, 1000},
+        {0, 0, 1.0, 1000},
+        {0.3, 0.3, -0.5, 1000},
+        {1e9, -1e9, 1e9, 500},
+        {-1e9, 0, 0, 500},
+        {0, 1e9, 0, 500},
+        {0, 0, 0, 500},
+        {0.05, 0, 0, 500},
+        {0, 0.05, 0, 500},
         {0.01, 0.01, 0, 500}}},
   };
   for (const Run& run : runs) {
@@ -308,9 +325,9 @@ TEST(SensorFaults, OdometryCheckKeepsQuietInNormalDriving) {
     FaultRig rig(options);
     for (const auto& step : run.plan) {
       rig.drive(step[0], step[1], step[2], static_cast<int>(step[3]));
-      ASSERT_EQ(rig.state().fault_count, 0U) << run.robot << " at " << step[0] << " " << step[1]
-                                             << " " << step[2] << ": "
-                                             << rig.state().fault_detail.data();
+      ASSERT_EQ(rig.state().fault_count, 0U)
+          << run.robot << " at " << step[0] << " " << step[1] << " " << step[2] << ": "
+          << rig.state().fault_detail.data();
     }
   }
 }

@@ -122,9 +122,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   bool swap = false;
   std::uint32_t xcdr = 0;
   switch (encapsulation) {
-    case kCdrBe: swap = true; xcdr = 1; break;
+    case kCdrBe:
+      swap = true;
+      xcdr = 1;
+      break;
     case kCdrLe: xcdr = 1; break;
-    case kCdr2Be: swap = true; xcdr = 2; break;
+    case kCdr2Be:
+      swap = true;
+      xcdr = 2;
+      break;
     case kCdr2Le: xcdr = 2; break;
     default: return 0;  // Cyclone refuses other encapsulations before deserialising
   }

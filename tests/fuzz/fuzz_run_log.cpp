@@ -56,9 +56,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::istringstream back(out.str());
     again = swivel::parse_run_log(back, "written.csv");
   } catch (const std::exception& e) {
-    swivel::fuzz::contract_broken(kTarget, "a log that parsed does not write and read back: " +
-                                               std::string(e.what()) + "\n--- written:\n" +
-                                               out.str());
+    swivel::fuzz::contract_broken(
+        kTarget, "a log that parsed does not write and read back: " + std::string(e.what()) +
+                     "\n--- written:\n" + out.str());
   }
   const auto& h = log.header;
   const bool swpc = h.drivetrain == swivel::DrivetrainKind::kSwpc;

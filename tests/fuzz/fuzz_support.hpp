@@ -19,8 +19,8 @@ namespace swivel::fuzz {
 
 // An exception of a type the API does not document.
 [[noreturn]] inline void unexpected_exception(const char* target, const std::exception& e) {
-  contract_broken(target, std::string("undocumented exception ") + typeid(e).name() + ": " +
-                              e.what());
+  contract_broken(target,
+                  std::string("undocumented exception ") + typeid(e).name() + ": " + e.what());
 }
 
 }  // namespace swivel::fuzz

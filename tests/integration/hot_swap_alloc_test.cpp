@@ -98,8 +98,8 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
       const Pose2& pose = s.estimate.pose;
       // The step across each swap: the outgoing estimate handed over, one cycle driven.
       if (s.localization_swaps != swaps_seen) {
-        max_step_m = std::max(max_step_m,
-                              std::hypot(pose.x_m - previous.x_m, pose.y_m - previous.y_m));
+        max_step_m =
+            std::max(max_step_m, std::hypot(pose.x_m - previous.x_m, pose.y_m - previous.y_m));
         swaps_seen = s.localization_swaps;
       }
       previous = pose;
@@ -141,8 +141,8 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   loop_thread.join();
 
   EXPECT_GE(cycles_armed, kCycles);
-  EXPECT_EQ(counts.allocations, 0u) << "first allocation: " << counts.first_allocation_bytes
-                                    << " bytes";
+  EXPECT_EQ(counts.allocations, 0u)
+      << "first allocation: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0u);
   const StateSnapshot last = loop.latest();
   EXPECT_EQ(last.localization_swaps, 3u);
@@ -151,9 +151,9 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   EXPECT_LT(max_step_m, kSpeedMps / kRateHz + 1e-3);
   EXPECT_GT(last.estimate.pose.x_m, 0.5);  // it did drive
   // Every plugin tracked the (nominal = true) robot: raw_eg on encoders at the end.
-  EXPECT_LT(std::hypot(last.estimate.pose.x_m - last.truth.x_m,
-                       last.estimate.pose.y_m - last.truth.y_m),
-            0.05);
+  EXPECT_LT(
+      std::hypot(last.estimate.pose.x_m - last.truth.x_m, last.estimate.pose.y_m - last.truth.y_m),
+      0.05);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothRobots, HotSwapAllocation,

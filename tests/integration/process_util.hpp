@@ -56,9 +56,9 @@ inline void write_by_rename(const std::string& path, const std::string& text) {
 /// A fresh directory for one test's files.
 inline std::string make_test_dir(const std::string& name) {
   static std::atomic<int> counter{0};
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("swivel_it_" + name + "_" + std::to_string(getpid()) + "_" +
-                    std::to_string(counter++));
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("swivel_it_" + name + "_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
@@ -116,7 +116,8 @@ class Child {
   /// The wait status once the process exited within `limit`.
   std::optional<int> wait_for(Seconds limit) {
     const auto deadline = Clock::now() + limit;
-    while (alive() && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    while (alive() && Clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     return status_;
   }
 

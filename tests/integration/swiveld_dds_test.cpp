@@ -252,8 +252,8 @@ TEST(SwiveldDds, EditingTheConfigurationSwapsLocalizationWithoutGapOrJump) {
     EXPECT_LT(dt, 0.25) << "gap in the state stream at sample " << i;
     // No pose jump: at most the distance driven plus noise.
     const double step = std::hypot(x_of(b) - x_of(a), y_of(b) - y_of(a));
-    EXPECT_LT(step, 0.3 * dt + 0.01) << "pose jump at sample " << i << ": " << a.dump()
-                                     << " -> " << b.dump();
+    EXPECT_LT(step, 0.3 * dt + 0.01)
+        << "pose jump at sample " << i << ": " << a.dump() << " -> " << b.dump();
     if (first_kalman == 0 && b["localization_plugin"] == "kalman") {
       first_kalman = i;
       EXPECT_EQ(a["localization_plugin"], "raw_eg");
@@ -433,9 +433,9 @@ TEST(SwiveldRecord, RecordsARunLogFromTheLiveRun) {
 TEST(SwiveldSwpc4, ShippedConfigurationDrivesTheCasterRobotAsCommanded) {
   // The shipped file as is: domain 0, robot id swpc4 (tests filter on the id).
   Child daemon(swiveld_exe(), {"--config", source_dir() + "/config/swiveld_swpc4.yaml"});
-  const ToolRun run = swivelctl({"echo", "state", "--json", "--robot", "swpc4", "--count", "900",
-                                 "--timeout", "10"},
-                                Seconds(40));
+  const ToolRun run = swivelctl(
+      {"echo", "state", "--json", "--robot", "swpc4", "--count", "900", "--timeout", "10"},
+      Seconds(40));
   ASSERT_EQ(run.exit_code, 0) << run.err << daemon.err();
   std::vector<json> samples;
   for (const auto& line : lines_of(run.out)) samples.push_back(json::parse(line));
@@ -465,8 +465,12 @@ TEST(SwiveldSwpc4, ShippedConfigurationDrivesTheCasterRobotAsCommanded) {
     }
     const auto& [ta, xa, ya] = *current->anchor;
     if (t - ta > 1.0) {
-      const std::string key{vx > 0.1 ? '+' : vx < -0.1 ? '-' : '0',
-                            vy > 0.1 ? '+' : vy < -0.1 ? '-' : '0'};
+      const std::string key{vx > 0.1    ? '+'
+                            : vx < -0.1 ? '-'
+                                        : '0',
+                            vy > 0.1    ? '+'
+                            : vy < -0.1 ? '-'
+                                        : '0'};
       measured[key] = {(x - xa) / (t - ta), (y - ya) / (t - ta)};
     }
   }

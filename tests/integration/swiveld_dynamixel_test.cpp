@@ -42,8 +42,8 @@ std::vector<Status> status_lines(const std::string& out) {
   std::istringstream in(out);
   for (std::string line; std::getline(in, line);) {
     Status s;
-    if (std::sscanf(line.c_str(), "t=%lfs pose x=%lf m y=%lf m yaw=%lf rad", &s.t_s, &s.x_m,
-                    &s.y_m, &s.yaw_rad) == 4) {
+    if (std::sscanf(line.c_str(), "t=%lfs pose x=%lf m y=%lf m yaw=%lf rad", &s.t_s, &s.x_m, &s.y_m,
+                    &s.yaw_rad) == 4) {
       s.line = line;
       lines.push_back(s);
     }
@@ -148,17 +148,16 @@ TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueO
   const std::vector<std::uint8_t> ids = {1, 11, 2, 12, 3, 13, 4, 14};
   dxl::Emulator emulator(servo_ids(ids));
   const std::string dir = make_test_dir("dxl_swpc4");
-  std::string params = "{port: " + emulator.port() +
-                       ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: [";
+  std::string params =
+      "{port: " + emulator.port() + ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: [";
   for (int m = 1; m <= 4; ++m) {
     params += (m == 1 ? "" : ", ") + std::string("{wheel: {id: ") + std::to_string(m) +
               "}, steer: {id: " + std::to_string(10 + m) + "}}";
   }
   params += "]}";
-  const std::string config =
-      write_config(dir, "swpc4", params,
-                   "    - {vx_mps: 0.2, duration_s: 2.0}\n"
-                   "    - {vy_mps: 0.2, duration_s: 600}\n");
+  const std::string config = write_config(dir, "swpc4", params,
+                                          "    - {vx_mps: 0.2, duration_s: 2.0}\n"
+                                          "    - {vy_mps: 0.2, duration_s: 600}\n");
   Child daemon(swiveld_exe(), {"--config", config, "--no-dds"});
   ASSERT_FALSE(daemon.wait_for(4s)) << "exited early:\n" << daemon.err();
   for (int m = 1; m <= 4; ++m) {
@@ -175,8 +174,7 @@ TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueO
   const auto lines = status_lines(daemon.out());
   ASSERT_GE(lines.size(), 20U) << daemon.out();
   const Status& last = lines.back();
-  EXPECT_NE(last.line.find("fault none"), std::string::npos) << last.line << "\n"
-                                                            << daemon.err();
+  EXPECT_NE(last.line.find("fault none"), std::string::npos) << last.line << "\n" << daemon.err();
   // 2 s forward at 0.2 m/s, then sideways: about 0.4 m ahead (less the casters turning at
   // the start) and moving left, without rotating.
   EXPECT_GT(last.x_m, 0.25) << last.line;

@@ -21,12 +21,10 @@ class Daemon {
          const std::string& localization)
       : robot_(robot), domain_(domain), dir_(make_test_dir("recovery_" + robot)) {
     std::string model = read_text(source_dir() + "/config/robots/docent.yaml");
-    model.replace(model.find("name: docent"), std::string("name: docent").size(),
-                  "name: " + robot);
+    model.replace(model.find("name: docent"), std::string("name: docent").size(), "name: " + robot);
     std::ofstream(dir_ + "/robot.yaml") << model;
     write(hardware, localization);
-    child_ = std::make_unique<Child>(swiveld_exe(),
-                                     std::vector<std::string>{"--config", config()});
+    child_ = std::make_unique<Child>(swiveld_exe(), std::vector<std::string>{"--config", config()});
   }
   ~Daemon() {
     child_.reset();

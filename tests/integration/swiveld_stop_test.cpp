@@ -48,7 +48,7 @@ StopRun stop_after_sigterm(const std::string& robot, int domain, const std::stri
       << "controlled_stop: " << controlled_stop << "\n"
       << "dds:\n  domain_id: " << domain << "\n  config: " << source_dir()
       << "/config/dds/loopback.xml\n";
-  const std::vector<std::string> ctl_tail = {"--robot", robot, "--domain", std::to_string(domain),
+  const std::vector<std::string> ctl_tail = {"--robot",   robot, "--domain", std::to_string(domain),
                                              "--timeout", "10"};
   auto ctl = [&](std::vector<std::string> args) {
     args.insert(args.end(), ctl_tail.begin(), ctl_tail.end());
@@ -141,8 +141,8 @@ TEST(SwiveldStop, SigtermStopsWithinTheRobotModelsDeceleration) {
 }
 
 TEST(SwiveldStop, WithoutModelLimitsSigtermStopsAtTheConfiguredDeceleration) {
-  const StopRun run = stop_after_sigterm("it_stop_default", 72, "",
-                                         "{linear_deceleration_mps2: 2.0}");
+  const StopRun run =
+      stop_after_sigterm("it_stop_default", 72, "", "{linear_deceleration_mps2: 2.0}");
   expect_stop_within(run, 2.0);
 }
 

@@ -89,15 +89,15 @@ TEST(PluginLoader, NotFoundListsEveryDirectorySearched) {
   } catch (const PluginError& e) {
     EXPECT_EQ(std::string(e.what()),
               "localization plugin 'raw_egg' not found: no swivel_localization_raw_egg.so in "
-              "/nonexistent/a, " + kDir +
-                  " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
+              "/nonexistent/a, " +
+                  kDir + " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
   }
 }
 
 TEST(PluginLoader, RefusesWrongAbiVersion) {
-  EXPECT_EQ(error_of("bad_abi"),
-            file_of("bad_abi") + ": ABI version 999, expected 3 (built for a newer Swivel: "
-                                 "rebuild the plugin against this one's headers)");
+  EXPECT_EQ(error_of("bad_abi"), file_of("bad_abi") +
+                                     ": ABI version 999, expected 3 (built for a newer Swivel: "
+                                     "rebuild the plugin against this one's headers)");
 }
 
 // ABI 2 added the hardware lifecycle hooks; a hardware plugin built before them would be
@@ -109,8 +109,9 @@ TEST(PluginLoader, RefusesHardwarePluginOfTheAbiBeforeTheLifecycleHooks) {
     FAIL() << "no error";
   } catch (const PluginError& e) {
     EXPECT_EQ(std::string(e.what()),
-              kDir + "/swivel_hardware_old_abi.so: ABI version 1, expected 3 (built for an "
-                     "older Swivel: rebuild the plugin against this one's headers)");
+              kDir +
+                  "/swivel_hardware_old_abi.so: ABI version 1, expected 3 (built for an "
+                  "older Swivel: rebuild the plugin against this one's headers)");
   }
 }
 
@@ -120,7 +121,8 @@ TEST(PluginLoader, RefusesAPluginBuiltWithAnotherLayoutAndNamesTheType) {
   EXPECT_EQ(error_of("layout_mismatch"),
             file_of("layout_mismatch") +
                 ": built with another layout of the plugin ABI: layout of HardwareState "
-                "differs: " + std::to_string(sizeof(HardwareState) + 8) + " bytes, alignment " +
+                "differs: " +
+                std::to_string(sizeof(HardwareState) + 8) + " bytes, alignment " +
                 std::to_string(alignof(HardwareState)) + " in the plugin; " +
                 std::to_string(sizeof(HardwareState)) + " bytes, alignment " +
                 std::to_string(alignof(HardwareState)) +
@@ -132,10 +134,12 @@ TEST(PluginLoader, RefusesAPluginBuiltWithAnotherLayoutAndNamesTheType) {
 TEST(PluginLoader, RefusesAPluginOfAnotherCxxAbi) {
   const std::string message = error_of("cxx_abi_mismatch");
   EXPECT_NE(message.find(file_of("cxx_abi_mismatch") + ": built with another layout"),
-            std::string::npos) << message;
-  EXPECT_NE(message.find("C++ ABI " + std::to_string(__GXX_ABI_VERSION + 1) +
-                         " in the plugin, " + std::to_string(__GXX_ABI_VERSION) + " here"),
-            std::string::npos) << message;
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("C++ ABI " + std::to_string(__GXX_ABI_VERSION + 1) + " in the plugin, " +
+                         std::to_string(__GXX_ABI_VERSION) + " here"),
+            std::string::npos)
+      << message;
 }
 
 TEST(PluginLoader, RefusesWrongKind) {
@@ -150,9 +154,9 @@ TEST(PluginLoader, RefusesLibraryWithoutEntryPoint) {
 }
 
 TEST(PluginLoader, RefusesNameMismatch) {
-  EXPECT_EQ(error_of("misnamed"),
-            file_of("misnamed") + ": name mismatch: the library declares 'other', expected "
-                                  "'misnamed'");
+  EXPECT_EQ(error_of("misnamed"), file_of("misnamed") +
+                                      ": name mismatch: the library declares 'other', expected "
+                                      "'misnamed'");
 }
 
 TEST(PluginLoader, ReportsExceptionThrownByConstructor) {
@@ -166,13 +170,15 @@ TEST(PluginLoader, RefusesKindMismatchWhenLoadingFileDirectly) {
     loader.create_from_file<Drivetrain>(file_of("good"));
     FAIL() << "no error";
   } catch (const PluginError& e) {
-    EXPECT_EQ(std::string(e.what()), file_of("good") + ": kind 'localization', expected 'drivetrain'");
+    EXPECT_EQ(std::string(e.what()),
+              file_of("good") + ": kind 'localization', expected 'drivetrain'");
   }
 }
 
 TEST(PluginLoader, ReportsUnloadableFile) {
   PluginLoader loader({});
-  const std::string not_a_library = std::string(SWIVEL_TEST_PLUGIN_DIR) + "/../../../CMakeCache.txt";
+  const std::string not_a_library =
+      std::string(SWIVEL_TEST_PLUGIN_DIR) + "/../../../CMakeCache.txt";
   try {
     loader.create_from_file<Localization>(not_a_library);
     FAIL() << "no error";
@@ -184,9 +190,10 @@ TEST(PluginLoader, ReportsUnloadableFile) {
 TEST(PluginLoader, ConfigureErrorNamesFileLineAndKey) {
   PluginLoader loader({kDir});
   auto loc = loader.create<Localization>("throws_configure");
-  YAML::Node config = YAML::Load("localization:\n  plugin: throws_configure\n  params:\n    gain: 3\n");
-  PluginContext ctx{config["localization"]["params"], "swiveld.yaml", "localization.params", ".",
-                    nullptr, 0.001};
+  YAML::Node config =
+      YAML::Load("localization:\n  plugin: throws_configure\n  params:\n    gain: 3\n");
+  PluginContext ctx{
+      config["localization"]["params"], "swiveld.yaml", "localization.params", ".", nullptr, 0.001};
   try {
     loc->configure(ctx);
     FAIL() << "no error";

@@ -5,7 +5,9 @@
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
   static const SwivelPluginDescriptor descriptor{
-      999u, SWIVEL_PLUGIN_LOCALIZATION, "bad_abi",
+      999u,
+      SWIVEL_PLUGIN_LOCALIZATION,
+      "bad_abi",
       [](const char** /*error*/) -> void* {
         return static_cast<swivel::Localization*>(new swivel::test_plugins::TestLocalization());
       },

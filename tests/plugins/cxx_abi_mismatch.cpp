@@ -16,7 +16,9 @@ const SwivelAbiFingerprint* other_compiler() {
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
   static const SwivelPluginDescriptor descriptor{
-      SWIVEL_PLUGIN_ABI_VERSION, SWIVEL_PLUGIN_LOCALIZATION, "cxx_abi_mismatch",
+      SWIVEL_PLUGIN_ABI_VERSION,
+      SWIVEL_PLUGIN_LOCALIZATION,
+      "cxx_abi_mismatch",
       [](const char** /*error*/) -> void* {
         return static_cast<swivel::Localization*>(new swivel::test_plugins::TestLocalization());
       },

@@ -25,7 +25,9 @@ const SwivelAbiFingerprint* grown_hardware_state() {
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
   static const SwivelPluginDescriptor descriptor{
-      SWIVEL_PLUGIN_ABI_VERSION, SWIVEL_PLUGIN_LOCALIZATION, "layout_mismatch",
+      SWIVEL_PLUGIN_ABI_VERSION,
+      SWIVEL_PLUGIN_LOCALIZATION,
+      "layout_mismatch",
       [](const char** /*error*/) -> void* {
         return static_cast<swivel::Localization*>(new swivel::test_plugins::TestLocalization());
       },

@@ -40,9 +40,9 @@ enum class Event : std::uint8_t {
 };
 
 constexpr std::array<const char*, 9> kEventNames = {
-    "configure",  "activate",           "activate_refused", "io",
-    "on_error",   "deactivate",         "deactivate_while_moving",
-    "io_while_inactive", "overlapping_calls"};
+    "configure",        "activate",   "activate_refused",        "io",
+    "on_error",         "deactivate", "deactivate_while_moving", "io_while_inactive",
+    "overlapping_calls"};
 
 // Static so that it outlives the instance: tests read it after the daemon destroyed it.
 struct Journal {
@@ -180,7 +180,7 @@ class LifecycleHardware final : public Hardware {
 }  // namespace swivel::test_plugins
 
 extern "C" __attribute__((visibility("default"))) int swivel_lifecycle_journal(char* out,
-                                                                              unsigned size) {
+                                                                               unsigned size) {
   using swivel::test_plugins::g_journal;
   using swivel::test_plugins::kEventNames;
   const std::uint32_t n = g_journal.count.load(std::memory_order_acquire);
@@ -198,7 +198,7 @@ extern "C" __attribute__((visibility("default"))) int swivel_lifecycle_journal(c
 }
 
 extern "C" __attribute__((visibility("default"))) int swivel_lifecycle_set(const char* what,
-                                                                          int on) {
+                                                                           int on) {
   if (std::strcmp(what, "fail_reads") == 0) {
     swivel::test_plugins::g_fail_reads.store(on != 0, std::memory_order_release);
   } else if (std::strcmp(what, "refuse_activate") == 0) {

@@ -18,13 +18,12 @@ struct DescriptorBeforeAbi3 {
 
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
-  static const DescriptorBeforeAbi3 descriptor{
-      1u, SWIVEL_PLUGIN_HARDWARE, "old_abi",
-      [](const char** error) -> void* {
-        *error = "must never be called";
-        return nullptr;
-      },
-      [](void* /*instance*/) {}};
+  static const DescriptorBeforeAbi3 descriptor{1u, SWIVEL_PLUGIN_HARDWARE, "old_abi",
+                                               [](const char** error) -> void* {
+                                                 *error = "must never be called";
+                                                 return nullptr;
+                                               },
+                                               [](void* /*instance*/) {}};
   // The host reads abi_version first and stops there, as it must for any older plugin.
   return reinterpret_cast<const SwivelPluginDescriptor*>(&descriptor);
 }

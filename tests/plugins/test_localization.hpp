@@ -3,9 +3,9 @@
 // A dead-simple localization that integrates odometry; the test plugins override one
 // behaviour each.
 
-#include "swivel/plugin/localization.hpp"
-
 #include <cmath>
+
+#include "swivel/plugin/localization.hpp"
 
 namespace swivel::test_plugins {
 

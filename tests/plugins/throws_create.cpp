@@ -13,5 +13,4 @@ class ThrowsInCreate : public TestLocalization {
 
 }  // namespace swivel::test_plugins
 
-SWIVEL_EXPORT_PLUGIN(swivel::test_plugins::ThrowsInCreate, swivel::Localization,
-                     "throws_create")
+SWIVEL_EXPORT_PLUGIN(swivel::test_plugins::ThrowsInCreate, swivel::Localization, "throws_create")

@@ -113,7 +113,7 @@ TEST(LatestValueStress, ConsumerGetsOnlyWholeNewerValuesAndFinallyTheNewest) {
   std::thread consumer([&] {
     Item item{};
     // Once `done` is seen, one more take() collects whatever was published last.
-    for (bool finishing = false;; ) {
+    for (bool finishing = false;;) {
       finishing = done.load(std::memory_order_acquire);
       if (latest.take(item)) {
         ++taken;

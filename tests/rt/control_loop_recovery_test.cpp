@@ -81,7 +81,6 @@ MotionLimits acceleration_limit(double mps2) {
   return limits;
 }
 
-
 TEST(LoopLimits, CommandsAccelerateAtTheModelsLimit) {
   Rig rig(options_with(acceleration_limit(0.5)));
   rig.drive(0.3, 100);
@@ -156,7 +155,6 @@ TEST(LoopLimits, TheLimiterFollowsTheDrivetrainsOwnLimits) {
   EXPECT_EQ(rig.vx(), 0.0);
 }
 
-
 TEST(ControlledStop, IgnoresCommandsAndBringsTheRobotToRest) {
   Rig rig(options_with(acceleration_limit(1.0)));
   rig.drive(0.5, 1000);
@@ -180,7 +178,6 @@ TEST(ControlledStop, IgnoresCommandsAndBringsTheRobotToRest) {
   EXPECT_EQ(rig.state().fault, FaultCode::kNone);
   EXPECT_EQ(rig.hardware.last_left_radps.load(), 0.0);
 }
-
 
 TEST(ClearRequest, IsRefusedWhileTheCausePersistsAndDoesNotWait) {
   Rig rig;
@@ -231,7 +228,6 @@ TEST(ClearRequest, NothingToClearIsAnswered) {
   EXPECT_EQ(reply.fault, FaultCode::kNone);
 }
 
-
 TEST(SetPoseRequest, GoesThroughTheActiveLocalizationsHandOver) {
   Rig rig;
   rig.step(5);
@@ -268,7 +264,6 @@ TEST(SetPoseRequest, ARefusalLeavesTheEstimateAndRaisesNoFault) {
   EXPECT_EQ(rig.state().fault, FaultCode::kNone);
   EXPECT_EQ(rig.state().mode, LoopMode::kVelocity);
 }
-
 
 TEST(HardwareError, OnErrorIsCalledOnceUntilAClear) {
   Rig rig;
@@ -318,7 +313,6 @@ TEST(HardwarePause, IsGrantedOnlyToAStoppedRobotAndStopsTheHardwareCalls) {
   loop.stop();
 }
 
-
 TEST(SwapRollback, ARefusedHandOverKeepsTheOutgoingInstance) {
   Rig rig;
   rig.drive(0.3, 200);
@@ -348,7 +342,6 @@ TEST(SwapRollback, ARefusedHandOverKeepsTheOutgoingInstance) {
   EXPECT_TRUE(outcome.taken);
   EXPECT_EQ(rig.loop->active_localization(), &working);
 }
-
 
 TEST(LoopRecoveryAllocations, LimitsStopsClearsPosesAndRollbacksAllocateNothing) {
   MotionLimits limits = acceleration_limit(1.0);
@@ -385,8 +378,8 @@ TEST(LoopRecoveryAllocations, LimitsStopsClearsPosesAndRollbacksAllocateNothing)
     counts = counter.counts();
   });
   loop_thread.join();
-  EXPECT_EQ(counts.allocations, 0U) << "first allocation: " << counts.first_allocation_bytes
-                                    << " bytes";
+  EXPECT_EQ(counts.allocations, 0U)
+      << "first allocation: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0U);
   EXPECT_TRUE(rig.state().stopping);
   EXPECT_EQ(rig.vx(), 0.0);

@@ -51,9 +51,9 @@ TEST(AxisLimiter, VelocityAndAccelerationBoundsHold) {
     ASSERT_LE(std::abs(t.v[k]), 0.5 + 1e-12) << k;
     ASSERT_LE(std::abs(t.a[k]), 0.6 + 1e-9) << k;
   }
-  EXPECT_NEAR(t.v[2999], 0.5, 1e-12);   // reached the velocity limit
+  EXPECT_NEAR(t.v[2999], 0.5, 1e-12);  // reached the velocity limit
   EXPECT_NEAR(t.v[5999], -0.5, 1e-12);
-  EXPECT_EQ(t.v.back(), 0.0);            // and stopped exactly
+  EXPECT_EQ(t.v.back(), 0.0);  // and stopped exactly
   // 0.5 m/s at 0.6 m/s^2 takes 0.833 s: still ramping after 0.8 s, there at 0.84 s.
   EXPECT_LT(t.v[799], 0.49);
   EXPECT_NEAR(t.v[839], 0.5, 1e-12);
@@ -96,7 +96,7 @@ TEST(TwistLimiter, ReadsTheRobotModelsLimitsPerAxis) {
   EXPECT_TRUE(l.active());
   Twist2 out;
   for (int k = 0; k < 100; ++k) out = l.step(Twist2{1.0, -1.0, 3.0}, kDt);
-  EXPECT_NEAR(out.vx_mps, 0.05, 1e-12);   // 0.1 s at 0.5 m/s^2, each axis on its own
+  EXPECT_NEAR(out.vx_mps, 0.05, 1e-12);  // 0.1 s at 0.5 m/s^2, each axis on its own
   EXPECT_NEAR(out.vy_mps, -0.05, 1e-12);
   EXPECT_NEAR(out.wz_radps, 0.2, 1e-12);
   for (int k = 0; k < 1000; ++k) out = l.step(Twist2{1.0, -1.0, 3.0}, kDt);

@@ -122,7 +122,8 @@ TEST(RunLog, UnknownCommentsAndBlankLinesAreIgnored) {
   EXPECT_TRUE(log.samples[0].has_truth);
   EXPECT_EQ(log.samples[0].truth.yaw_rad, 3.0);
   EXPECT_EQ(log.samples[1].gyro_wz_radps, 0.001);
-  EXPECT_EQ(log.header.comments, (std::vector<std::string>{"recorded by: bench 3", "note: carpet"}));
+  EXPECT_EQ(log.header.comments,
+            (std::vector<std::string>{"recorded by: bench 3", "note: carpet"}));
 }
 
 TEST(RunLog, HeaderKeysDoNotDependOnTheBlanksAfterTheHash) {
@@ -156,7 +157,8 @@ TEST(RunLog, SwpcColumnCountComesFromModules) {
 }
 
 TEST(RunLog, NonNumberNamesLineAndColumn) {
-  const std::string text = std::string(kDifferentialHead) + "0,0,0,0,0,0,0,,,\n0.01,0,0,0,abc,0,0,,,\n";
+  const std::string text =
+      std::string(kDifferentialHead) + "0,0,0,0,0,0,0,,,\n0.01,0,0,0,abc,0,0,,,\n";
   EXPECT_EQ(expect_error(text), "run.csv:6: column wheel_l: expected a finite number, got 'abc'");
   const std::string nan_text = std::string(kDifferentialHead) + "0,0,0,0,0,0,nan,,,\n";
   EXPECT_EQ(expect_error(nan_text),
@@ -178,7 +180,8 @@ TEST(RunLog, MissingHeaderRowIsReported) {
 TEST(RunLog, MissingOrWrongPreambleIsReported) {
   EXPECT_EQ(expect_error("# robot: x\n# drivetrain: differential\nt\n"),
             "run.csv:3: missing '# swivel-run 1' line");
-  EXPECT_EQ(expect_error("# swivel-run 2\n"), "run.csv:1: unsupported run log version 2 (this reader reads 1)");
+  EXPECT_EQ(expect_error("# swivel-run 2\n"),
+            "run.csv:1: unsupported run log version 2 (this reader reads 1)");
   EXPECT_EQ(expect_error("# swivel-run 1\n# drivetrain: tank\n"),
             "run.csv:2: expected drivetrain 'differential' or 'swpc', got 'tank'");
   EXPECT_EQ(expect_error("# swivel-run 1\n# drivetrain: swpc\nt\n"),

@@ -118,8 +118,7 @@ TEST(SdNotify, RejectsARelativeSocketPath) {
 }
 
 TEST(SdNotify, ParsesWatchdogUsecForThisProcessOnly) {
-  EXPECT_EQ(parse_watchdog_interval("2000000", nullptr, 42),
-            std::chrono::microseconds(2000000));
+  EXPECT_EQ(parse_watchdog_interval("2000000", nullptr, 42), std::chrono::microseconds(2000000));
   EXPECT_EQ(parse_watchdog_interval("2000000", "42", 42), std::chrono::microseconds(2000000));
   EXPECT_EQ(parse_watchdog_interval("2000000", "43", 42), std::nullopt);
   EXPECT_EQ(parse_watchdog_interval(nullptr, nullptr, 42), std::nullopt);

@@ -103,9 +103,7 @@ void delete_impl(void* pointer) noexcept {
 
 namespace swivel::test {
 
-bool malloc_is_counted() noexcept {
-  return SWIVEL_ALLOC_GUARD_MALLOC != 0;
-}
+bool malloc_is_counted() noexcept { return SWIVEL_ALLOC_GUARD_MALLOC != 0; }
 
 AllocCounter::AllocCounter() noexcept
     : allocations_at_start_(g_allocations.load(std::memory_order_relaxed)),
@@ -114,9 +112,7 @@ AllocCounter::AllocCounter() noexcept
   t_armed = true;
 }
 
-AllocCounter::~AllocCounter() {
-  t_armed = false;
-}
+AllocCounter::~AllocCounter() { t_armed = false; }
 
 HeapCounts AllocCounter::counts() const noexcept {
   HeapCounts c;
@@ -129,12 +125,8 @@ HeapCounts AllocCounter::counts() const noexcept {
 }  // namespace swivel::test
 
 // Replacements of the global allocation functions ([new.delete]).
-void* operator new(std::size_t size) {
-  return new_impl(size, 0, false);
-}
-void* operator new[](std::size_t size) {
-  return new_impl(size, 0, false);
-}
+void* operator new(std::size_t size) { return new_impl(size, 0, false); }
+void* operator new[](std::size_t size) { return new_impl(size, 0, false); }
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   try {
     return new_impl(size, 0, true);
@@ -170,39 +162,17 @@ void* operator new[](std::size_t size, std::align_val_t alignment, const std::no
   }
 }
 
-void operator delete(void* p) noexcept {
-  delete_impl(p);
-}
-void operator delete[](void* p) noexcept {
-  delete_impl(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  delete_impl(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  delete_impl(p);
-}
-void operator delete(void* p, const std::nothrow_t&) noexcept {
-  delete_impl(p);
-}
-void operator delete[](void* p, const std::nothrow_t&) noexcept {
-  delete_impl(p);
-}
-void operator delete(void* p, std::align_val_t) noexcept {
-  delete_impl(p);
-}
-void operator delete[](void* p, std::align_val_t) noexcept {
-  delete_impl(p);
-}
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
-  delete_impl(p);
-}
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
-  delete_impl(p);
-}
-void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
-  delete_impl(p);
-}
+void operator delete(void* p) noexcept { delete_impl(p); }
+void operator delete[](void* p) noexcept { delete_impl(p); }
+void operator delete(void* p, std::size_t) noexcept { delete_impl(p); }
+void operator delete[](void* p, std::size_t) noexcept { delete_impl(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { delete_impl(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { delete_impl(p); }
+void operator delete(void* p, std::align_val_t) noexcept { delete_impl(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { delete_impl(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { delete_impl(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { delete_impl(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { delete_impl(p); }
 void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
   delete_impl(p);
 }

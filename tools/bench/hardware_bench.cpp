@@ -68,7 +68,8 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   const std::vector<std::uint8_t> ids = ids_for(c.servos);
   const bool steering = c.servos > 2;
   std::vector<std::uint8_t> wheels, steers;
-  for (std::size_t i = 0; i < ids.size(); ++i) (steering && i % 2 == 1 ? steers : wheels).push_back(ids[i]);
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    (steering && i % 2 == 1 ? steers : wheels).push_back(ids[i]);
   std::vector<std::uint8_t> goals(4 * ids.size(), 0);
   std::vector<dxl::SyncReply> replies(ids.size());
   BusFigures f;
@@ -76,7 +77,8 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   double now = start;
   while (now - start < seconds) {
     const double t0 = monotonic_s();
-    bool ok = bus.sync_write(dxl::address::kGoalVelocity, 4, wheels, {goals.data(), 4 * wheels.size()});
+    bool ok =
+        bus.sync_write(dxl::address::kGoalVelocity, 4, wheels, {goals.data(), 4 * wheels.size()});
     if (!steers.empty()) {
       ok = ok && bus.sync_write(dxl::address::kGoalPosition, 4, steers,
                                 {goals.data(), 4 * steers.size()});
@@ -97,9 +99,9 @@ double wire_us(const Case& c) {
   const bool steering = n > 2;
   const std::size_t wheels = steering ? n / 2 : n;
   const std::size_t steers = steering ? n / 2 : 0;
-  std::size_t bytes = 14 + 5 * wheels;                 // Sync Write: header..params + CRC
+  std::size_t bytes = 14 + 5 * wheels;  // Sync Write: header..params + CRC
   if (steers > 0) bytes += 14 + 5 * steers;
-  bytes += 14 + n + n * 19;                            // Sync Read, n statuses of 8 data bytes
+  bytes += 14 + n + n * 19;  // Sync Read, n statuses of 8 data bytes
   return static_cast<double>(bytes) * 10.0 / c.baud * 1e6;
 }
 
@@ -116,7 +118,8 @@ void floor_lateness(const HardwareSettings& s, rt::LatencyHistogram& lateness) {
       const std::int64_t woke_ns = monotonic_ns();
       lateness.record(woke_ns - deadline_ns);
       deadline_ns += period_ns;
-      if (woke_ns > deadline_ns) deadline_ns += ((woke_ns - deadline_ns) / period_ns + 1) * period_ns;
+      if (woke_ns > deadline_ns)
+        deadline_ns += ((woke_ns - deadline_ns) / period_ns + 1) * period_ns;
     }
   });
   thread.join();
@@ -127,9 +130,9 @@ void floor_lateness(const HardwareSettings& s, rt::LatencyHistogram& lateness) {
 bool loop_lateness(const HardwareSettings& s, const Case& c, rt::TimingReport& report,
                    std::string& end_state, std::string& why) {
   dxl::Emulator emulator(emulator_options(c, s));
-  const std::string dir = (std::filesystem::temp_directory_path() /
-                           ("swivel_bench_hw_" + std::to_string(getpid())))
-                              .string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("swivel_bench_hw_" + std::to_string(getpid())))
+          .string();
   std::filesystem::create_directories(dir);
   const bool differential = c.servos == 2;
   std::string params = "{port: " + emulator.port() + ", baud: " + std::to_string(c.baud) +
@@ -200,7 +203,8 @@ int run_hardware(const HardwareSettings& s) {
       "each byte emulated at the baud rate (10 bits per byte, Return Delay Time 0, no USB\n"
       "adapter latency). %.1f s per measurement.\n\n",
       s.seconds);
-  std::printf("bus cycle = Sync Write of goals + Sync Read of velocity and position, back to back\n");
+  std::printf(
+      "bus cycle = Sync Write of goals + Sync Read of velocity and position, back to back\n");
   std::printf("  %-7s %-6s %8s %8s %8s %8s %10s %12s %9s\n", "servos", "Mbps", "wire", "p50", "p99",
               "max", "cycles/s", "max rate p99", "failures");
   for (const Case& c : cases) {
@@ -212,13 +216,12 @@ int run_hardware(const HardwareSettings& s) {
     });
     thread.join();
     const double p99 = percentile(f.cycle_us, 0.99);
-    std::printf("  %-7zu %-6.0f %7.0fus %7.0fus %7.0fus %7.0fus %10.0f %10.0f Hz %9llu\n",
-                c.servos, c.baud / 1e6, wire_us(c), percentile(f.cycle_us, 0.5), p99,
+    std::printf("  %-7zu %-6.0f %7.0fus %7.0fus %7.0fus %7.0fus %10.0f %10.0f Hz %9llu\n", c.servos,
+                c.baud / 1e6, wire_us(c), percentile(f.cycle_us, 0.5), p99,
                 percentile(f.cycle_us, 1.0), f.cycles_per_s, p99 > 0 ? 1e6 / p99 : 0.0,
                 static_cast<unsigned long long>(f.failures));
   }
-  std::printf(
-      "  (max rate p99: the loop rate at which 99%% of cycles get a fresh reading)\n\n");
+  std::printf("  (max rate p99: the loop rate at which 99%% of cycles get a fresh reading)\n\n");
 
   rt::CpuDmaLatencyRequest dma;
   if (s.realtime) {

@@ -11,7 +11,7 @@
 namespace swivel::bench {
 
 struct HardwareSettings {
-  double seconds = 3.0;   ///< per measurement
+  double seconds = 3.0;    ///< per measurement
   double rate_hz = 500.0;  ///< loop rate of the lateness phases
   int priority = 80;
   bool realtime = true;

@@ -113,11 +113,12 @@ int run_swap(const SwapSettings& s) {
   print_row("request -> seen by the requesting thread", observed_us);
   std::printf("\n  swaps taken: %zu of %d; loop period %.0f us\n", first_update_us.size(), s.swaps,
               1e6 / s.rate_hz);
-  std::printf("  loop over the run: cycles %llu, overruns %llu, lateness p99.9 %.1f us, cycle "
-              "time p99.9 %.1f us (max %.1f us)\n",
-              static_cast<unsigned long long>(after.cycles - before.cycles),
-              static_cast<unsigned long long>(after.overruns - before.overruns),
-              after.lateness_p999_us, after.cycle_p999_us, after.cycle_max_us);
+  std::printf(
+      "  loop over the run: cycles %llu, overruns %llu, lateness p99.9 %.1f us, cycle "
+      "time p99.9 %.1f us (max %.1f us)\n",
+      static_cast<unsigned long long>(after.cycles - before.cycles),
+      static_cast<unsigned long long>(after.overruns - before.overruns), after.lateness_p999_us,
+      after.cycle_p999_us, after.cycle_max_us);
   return status;
 }
 

@@ -9,12 +9,12 @@
 namespace swivel::bench {
 
 struct SwapSettings {
-  int swaps = 60;                  ///< swaps to time, cycling kalman -> lsm -> raw_eg
-  double interval_s = 0.05;        ///< pause between swaps
+  int swaps = 60;            ///< swaps to time, cycling kalman -> lsm -> raw_eg
+  double interval_s = 0.05;  ///< pause between swaps
   double rate_hz = 1000.0;
   int priority = 80;
   bool realtime = true;
-  std::string config;              ///< daemon configuration naming the other plugins
+  std::string config;  ///< daemon configuration naming the other plugins
 };
 
 /// Prints the figures; returns the process exit code (1 when the plugins cannot be loaded or

@@ -210,8 +210,7 @@ int run(const Settings& s) {
   const auto& f = *floor;
   const auto& l = loop->lateness;
   std::printf("\npooled over the blocks of each phase\n");
-  std::printf("  %-22s %9s %9s %9s %9s %9s   [us]\n", "", "p50", "p99", "p99.9", "max",
-              "samples");
+  std::printf("  %-22s %9s %9s %9s %9s %9s   [us]\n", "", "p50", "p99", "p99.9", "max", "samples");
   print_row("floor lateness", f);
   print_row("loop lateness", l);
   std::printf("  %-22s %9s %9s %9s %9s\n", "ratio loop/floor",
@@ -223,8 +222,8 @@ int run(const Settings& s) {
   const auto beyond = [](const LatencyHistogram& h) {
     return static_cast<unsigned long long>(static_cast<double>(h.count()) * 0.001);
   };
-  std::printf("  p99.9 rests on the %llu (floor) and %llu (loop) largest samples%s\n",
-              beyond(f), beyond(l),
+  std::printf("  p99.9 rests on the %llu (floor) and %llu (loop) largest samples%s\n", beyond(f),
+              beyond(l),
               std::min(beyond(f), beyond(l)) < 100 ? ": fewer than 100, a rough figure" : "");
 
   std::printf("\nloop/floor lateness ratio per pair (floor block, then loop block of %.1f s)\n",
@@ -275,7 +274,8 @@ int main(int argc, char** argv) {
   swivel::bench::SwapSettings swap_settings;
   swap_settings.config = SWIVEL_DEFAULT_CONFIG;
   auto* swap = app.add_subcommand(
-      "swap", "localization hot swaps on the running loop: request to the new plugin's first update");
+      "swap",
+      "localization hot swaps on the running loop: request to the new plugin's first update");
   swap->add_option("--swaps", swap_settings.swaps, "swaps to time (kalman, lsm, raw_eg in turn)")
       ->check(CLI::Range(1, 100000));
   swap->add_option("--interval-s", swap_settings.interval_s, "pause between swaps, s")
@@ -298,8 +298,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 10000.0));
   hardware->add_flag("!--no-realtime", hardware_settings.realtime,
                      "do not try SCHED_FIFO, mlockall or cpu_dma_latency");
-  hardware->add_option("--robots", hardware_settings.robots_dir,
-                       "directory with docent.yaml and swpc4.yaml")
+  hardware
+      ->add_option("--robots", hardware_settings.robots_dir,
+                   "directory with docent.yaml and swpc4.yaml")
       ->check(CLI::ExistingDirectory);
 #endif
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench")) return *exit;

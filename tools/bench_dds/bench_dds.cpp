@@ -12,14 +12,14 @@
 // publishes each sample right after the loop cycle that made it: one DDS hop). The exit
 // status follows the RobotState target; odom and tf are reported against the same bound.
 
-#include <CLI/CLI.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
-#include <csignal>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <mutex>
@@ -30,10 +30,10 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/cli/command_line.hpp"
-#include "swivel/stats/summary.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/topics.hpp"
+#include "swivel/stats/summary.hpp"
 
 namespace swivel::dds {
 namespace {
@@ -133,17 +133,19 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   const pid_t child = fork();
   if (child == 0) {
     const std::string rate = std::to_string(rate_hz);
-    execl("/proc/self/exe", "swivel-bench-dds", "--server", "--robot", robot.c_str(),
-          "--rate-hz", rate.c_str(), static_cast<char*>(nullptr));
+    execl("/proc/self/exe", "swivel-bench-dds", "--server", "--robot", robot.c_str(), "--rate-hz",
+          rate.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
   Participant pp({0, tool_config_uri()});
-  const dds_entity_t state = make_reader(pp.handle(), &swivel_msg_RobotState_desc, kRobotStateTopic);
+  const dds_entity_t state =
+      make_reader(pp.handle(), &swivel_msg_RobotState_desc, kRobotStateTopic);
   Ros2Options ros2;
   ros2.ros_namespace = robot;
   const dds_entity_t odom =
       make_reader(pp.handle(), &nav_msgs_msg_dds__Odometry__desc, ros2.odom_topic());
-  const dds_entity_t tf = make_reader(pp.handle(), &tf2_msgs_msg_dds__TFMessage__desc, ros2.tf_topic());
+  const dds_entity_t tf =
+      make_reader(pp.handle(), &tf2_msgs_msg_dds__TFMessage__desc, ros2.tf_topic());
   const dds_entity_t ping = make_writer(pp.handle(), &swivel_msg_VelocityCommand_desc, kPingTopic);
   const dds_entity_t pong = make_reader(pp.handle(), &swivel_msg_VelocityCommand_desc, kPongTopic);
   auto finish = [&](int code) {
@@ -189,7 +191,8 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
     const double ros_now = 1e-9 * static_cast<double>(realtime_ns());
     for (dds_return_t i = 0; i < n_odom; ++i) {
       const auto* o = static_cast<const nav_msgs_msg_dds__Odometry_*>(samples[i]);
-      if (infos[i].valid_data) odom_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(o->header.stamp)));
+      if (infos[i].valid_data)
+        odom_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(o->header.stamp)));
     }
     if (n_odom > 0) dds_return_loan(odom, samples, n_odom);
     const dds_return_t n_tf = dds_take(tf, samples, infos, 16, 16);
@@ -197,7 +200,8 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
       const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(samples[i]);
       if (!infos[i].valid_data || m->transforms._length == 0) continue;
       const auto& t = m->transforms._buffer[0];
-      if (odom_frame == t.header.frame_id) tf_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(t.header.stamp)));
+      if (odom_frame == t.header.frame_id)
+        tf_ages_us.push_back(1e6 * (ros_now - ros_stamp_s(t.header.stamp)));
     }
     if (n_tf > 0) dds_return_loan(tf, samples, n_tf);
   }
@@ -259,17 +263,19 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
   // One DDS hop after the loop: the floor plus what the publisher may add (the loop
   // cycle's own work and the publisher's wake-up).
   const double target_us = floor_p99 + kAllowanceUs;
-  std::printf("state age at client (%zu samples at %.0f Hz, 1 kHz synthetic loop): "
-              "p50 %.1f us  p99 %.1f us  max %.1f us\n",
-              ages_us.size(), rate_hz, age_p50, age_p99, percentile(ages_us, 1.0));
-  std::printf("DDS floor, one-way (ping-pong RTT/2, %zu round trips at %.0f Hz, same QoS): "
-              "p50 %.1f us  p99 %.1f us\n",
-              one_way_us.size(), rate_hz, floor_p50, floor_p99);
+  std::printf(
+      "state age at client (%zu samples at %.0f Hz, 1 kHz synthetic loop): "
+      "p50 %.1f us  p99 %.1f us  max %.1f us\n",
+      ages_us.size(), rate_hz, age_p50, age_p99, percentile(ages_us, 1.0));
+  std::printf(
+      "DDS floor, one-way (ping-pong RTT/2, %zu round trips at %.0f Hz, same QoS): "
+      "p50 %.1f us  p99 %.1f us\n",
+      one_way_us.size(), rate_hz, floor_p50, floor_p99);
   std::printf("  (back-to-back, %zu round trips 0.5 ms apart: p50 %.1f us  p99 %.1f us)\n",
               warm_us.size(), percentile(warm_us, 0.50), percentile(warm_us, 0.99));
-  std::printf("target: age p99 <= floor p99 + %.0f us = %.1f us: %s (age p99 - floor p99 = %.1f us)\n",
-              kAllowanceUs, target_us, age_p99 <= target_us ? "met" : "NOT met",
-              age_p99 - floor_p99);
+  std::printf(
+      "target: age p99 <= floor p99 + %.0f us = %.1f us: %s (age p99 - floor p99 = %.1f us)\n",
+      kAllowanceUs, target_us, age_p99 <= target_us ? "met" : "NOT met", age_p99 - floor_p99);
   // ROS 2 ages rest on two clocks (the server's realtime stamp, the client's realtime
   // receive time) of the same host, so they compare directly with the floor too.
   const auto report_ros = [&](const char* name, const std::vector<double>& ages) {
@@ -278,10 +284,11 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
       return;
     }
     const double p99 = percentile(ages, 0.99);
-    std::printf("%-8s age at client (%zu samples): p50 %.1f us  p99 %.1f us  max %.1f us; "
-                "p99 - floor p99 = %.1f us: %s\n",
-                name, ages.size(), percentile(ages, 0.50), p99, percentile(ages, 1.0),
-                p99 - floor_p99, p99 <= target_us ? "within the target" : "beyond the target");
+    std::printf(
+        "%-8s age at client (%zu samples): p50 %.1f us  p99 %.1f us  max %.1f us; "
+        "p99 - floor p99 = %.1f us: %s\n",
+        name, ages.size(), percentile(ages, 0.50), p99, percentile(ages, 1.0), p99 - floor_p99,
+        p99 <= target_us ? "within the target" : "beyond the target");
   };
   report_ros("rt/odom", odom_ages_us);
   report_ros("rt/tf", tf_ages_us);

@@ -3,7 +3,6 @@
 // (two per module), written as a calibrated copy of the nominal robot model.
 
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -59,8 +58,8 @@ std::string default_out(const std::string& model_file) {
 }
 
 void print_results(const RobotModel& nominal, const calibration::CalibrationResult& result) {
-  std::printf("%-6s %-22s %-22s %-20s %-20s %-20s\n", "module", "x [mm]", "y [mm]",
-              "delta [deg]", "d [mm]", "r [mm]");
+  std::printf("%-6s %-22s %-22s %-20s %-20s %-20s\n", "module", "x [mm]", "y [mm]", "delta [deg]",
+              "d [mm]", "r [mm]");
   for (std::size_t i = 0; i < result.modules.size(); ++i) {
     const auto& p = result.modules[i].params;
     const auto& s = result.modules[i].sigma;
@@ -104,14 +103,12 @@ int run_calibrate(const CalibrateOptions& o) {
                                   "with --lock MODULE[:DEG] (one per --run)");
     }
     if (logs.back().header.module_count != nominal.modules.size()) {
-      throw std::invalid_argument(o.runs[j] + ": " +
-                                  std::to_string(logs.back().header.module_count) +
-                                  " modules, but " + o.model_file + " has " +
-                                  std::to_string(nominal.modules.size()));
+      throw std::invalid_argument(
+          o.runs[j] + ": " + std::to_string(logs.back().header.module_count) + " modules, but " +
+          o.model_file + " has " + std::to_string(nominal.modules.size()));
     }
   }
-  const calibration::CalibrationInput input =
-      calibration::calibration_input_from_logs(logs, locks);
+  const calibration::CalibrationInput input = calibration::calibration_input_from_logs(logs, locks);
   std::printf("calibrating %s from %zu runs:\n", nominal.name.c_str(), input.runs.size());
   for (std::size_t j = 0; j < input.runs.size(); ++j) {
     std::printf("  %s: module %zu locked at %.3f deg, %zu motion-capture samples\n",

@@ -37,7 +37,9 @@ std::uint64_t splitmix64(std::uint64_t x) {
   return x ^ (x >> 31U);
 }
 
-double distance_m(const Pose2& a, const Pose2& b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
+double distance_m(const Pose2& a, const Pose2& b) {
+  return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m);
+}
 
 // Every method as its plugin runs it: the kalman and lsm plugins each integrate their own
 // E/G from the readings, so each gets its own EgOdometry configured the same way.
@@ -195,7 +197,8 @@ DocentRunResult run_docent(const RobotModel& nominal, const DocentScenario& scen
                            const DocentRunDraw& draw, const DocentExperimentConfig& config,
                            bool keep_trace) {
   if (nominal.drivetrain != DrivetrainKind::kDifferential) {
-    throw std::invalid_argument(nominal.source_file + ": the docent experiment needs a "
+    throw std::invalid_argument(nominal.source_file +
+                                ": the docent experiment needs a "
                                 "differential robot");
   }
   const DocentDriveProfile& drive = config.drive;
@@ -216,12 +219,12 @@ DocentRunResult run_docent(const RobotModel& nominal, const DocentScenario& scen
   DocentRunResult result;
   result.draw = draw;
   const double length_m = scenario.end_x_m - scenario.start_x_m;
-  const auto sample_count = static_cast<std::size_t>(
-      std::max(1.0, std::round(length_m / config.sample_spacing_m)));
+  const auto sample_count =
+      static_cast<std::size_t>(std::max(1.0, std::round(length_m / config.sample_spacing_m)));
   std::size_t next_sample = 1;
   const double dt_s = 1.0 / drive.rate_hz;
-  const auto trace_every = static_cast<std::int64_t>(
-      std::max(1.0, std::round(config.trace_period_s * drive.rate_hz)));
+  const auto trace_every =
+      static_cast<std::int64_t>(std::max(1.0, std::round(config.trace_period_s * drive.rate_hz)));
 
   HardwareState prev;
   HardwareState now;
@@ -230,9 +233,9 @@ DocentRunResult run_docent(const RobotModel& nominal, const DocentScenario& scen
   const auto max_steps = static_cast<std::int64_t>(kMaxRunS * drive.rate_hz);
   for (std::int64_t k = 0;; ++k) {
     if (k > max_steps) {
-      throw std::runtime_error(scenario.name + ": the robot did not reach x = " +
-                               std::to_string(scenario.end_x_m) + " m within " +
-                               std::to_string(kMaxRunS) + " s");
+      throw std::runtime_error(scenario.name +
+                               ": the robot did not reach x = " + std::to_string(scenario.end_x_m) +
+                               " m within " + std::to_string(kMaxRunS) + " s");
     }
     const double t_s = static_cast<double>(k) * dt_s;
     const Pose2& truth = world.true_pose();
@@ -246,8 +249,9 @@ DocentRunResult run_docent(const RobotModel& nominal, const DocentScenario& scen
       v = std::max(v, drive.min_speed_mps);
       const double lateral_m = truth.y_m - scenario.line_y_m;
       twist.vx_mps = v;
-      twist.wz_radps = -(drive.lateral_gain_per_m2 * v * lateral_m +
-                         drive.yaw_gain_per_s * std::remainder(truth.yaw_rad, 2.0 * std::numbers::pi));
+      twist.wz_radps =
+          -(drive.lateral_gain_per_m2 * v * lateral_m +
+            drive.yaw_gain_per_s * std::remainder(truth.yaw_rad, 2.0 * std::numbers::pi));
     }
     controller.velocity(twist, prev, command);
     if (world.step(dt_s, command) != Status::kOk) {
@@ -269,9 +273,8 @@ DocentRunResult run_docent(const RobotModel& nominal, const DocentScenario& scen
     if (keep_trace && (k % trace_every == 0)) {
       result.trace.push_back(DocentTracePoint{world.time_s(), moved, est});
     }
-    const double target_x_m =
-        scenario.start_x_m + length_m * static_cast<double>(next_sample) /
-                                 static_cast<double>(sample_count);
+    const double target_x_m = scenario.start_x_m + length_m * static_cast<double>(next_sample) /
+                                                       static_cast<double>(sample_count);
     if (moved.x_m >= target_x_m) {
       result.sample_x_m.push_back(moved.x_m);
       for (std::size_t m = 0; m < kDocentMethodCount; ++m) {
@@ -300,7 +303,8 @@ std::vector<DocentScenarioResult> run_docent_experiment(const RobotModel& nomina
     sr.scenario = scenarios[s];
     for (std::size_t r = 0; r < config.runs; ++r) {
       const DocentRunDraw draw = draw_docent_run(config.errors, config.seed, s, r);
-      sr.runs.push_back(run_docent(nominal, scenarios[s], draw, config, config.keep_trace && r == 0));
+      sr.runs.push_back(
+          run_docent(nominal, scenarios[s], draw, config, config.keep_trace && r == 0));
     }
     out.push_back(std::move(sr));
   }

@@ -44,22 +44,22 @@ std::vector<DocentScenario> docent_scenarios();
 
 /// Ranges from which each run's true robot is drawn, and the fixed error sources.
 struct DocentErrorModel {
-  double gyro_bias_sigma_radps = 3.5e-4;    ///< residual bias after start-up calibration (0.02 deg/s)
-  double gyro_scale_sigma = 0.005;          ///< scale factor error, 1-sigma
-  double gyro_noise_radps = 0.002;          ///< white noise per 100 Hz sample, 1-sigma
-  double wheel_radius_error_max = 0.003;    ///< each true radius = nominal (1 + U(-max, max))
-  double wheel_slip_std = 0.003;            ///< random slip, relative 1-sigma (Gauss-Markov)
+  double gyro_bias_sigma_radps = 3.5e-4;  ///< residual bias after start-up calibration (0.02 deg/s)
+  double gyro_scale_sigma = 0.005;        ///< scale factor error, 1-sigma
+  double gyro_noise_radps = 0.002;        ///< white noise per 100 Hz sample, 1-sigma
+  double wheel_radius_error_max = 0.003;  ///< each true radius = nominal (1 + U(-max, max))
+  double wheel_slip_std = 0.003;          ///< random slip, relative 1-sigma (Gauss-Markov)
   double slip_correlation_time_s = 0.5;
 };
 
 /// How the robot is driven.
 struct DocentDriveProfile {
-  double rate_hz = 100.0;            ///< control, sensor and localization rate
-  double still_before_s = 2.0;       ///< standing still before moving (gyro running)
+  double rate_hz = 100.0;       ///< control, sensor and localization rate
+  double still_before_s = 2.0;  ///< standing still before moving (gyro running)
   double cruise_speed_mps = 0.3;
-  double accel_mps2 = 0.3;           ///< ramp up and braking to the end point
-  double min_speed_mps = 0.02;       ///< creep speed for the last millimetres
-  double lateral_gain_per_m2 = 11.0; ///< line follower: wz = -(k_lat v e + k_yaw yaw)
+  double accel_mps2 = 0.3;            ///< ramp up and braking to the end point
+  double min_speed_mps = 0.02;        ///< creep speed for the last millimetres
+  double lateral_gain_per_m2 = 11.0;  ///< line follower: wz = -(k_lat v e + k_yaw yaw)
   double yaw_gain_per_s = 1.4;
 };
 
@@ -69,7 +69,7 @@ struct DocentExperimentConfig {
   double sample_spacing_m = 0.1;  ///< errors sampled where the truth crosses every spacing
   DocentErrorModel errors;
   DocentDriveProfile drive;
-  bool keep_trace = true;          ///< keep run 1's decimated trajectory per scenario
+  bool keep_trace = true;  ///< keep run 1's decimated trajectory per scenario
   double trace_period_s = 0.1;
 };
 
@@ -100,12 +100,12 @@ struct DocentMethodStats {
 
 struct DocentRunResult {
   DocentRunDraw draw;
-  std::vector<double> sample_x_m;                        ///< true x at each sample
+  std::vector<double> sample_x_m;                                ///< true x at each sample
   std::array<std::vector<double>, kDocentMethodCount> errors_m;  ///< per sample
   std::array<DocentMethodStats, kDocentMethodCount> stats{};
   double duration_s = 0.0;
   Pose2 true_end;
-  double ekf_bias_radps = 0.0;  ///< the EKF's gyro-bias estimate at the end
+  double ekf_bias_radps = 0.0;          ///< the EKF's gyro-bias estimate at the end
   std::vector<DocentTracePoint> trace;  ///< empty unless kept
 };
 

@@ -4,7 +4,6 @@
 // DIR/model_augmented.yaml.
 
 #include <CLI/CLI.hpp>
-
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -30,8 +29,8 @@ int run_gap(const GapCommandOptions& o) {
   model_gap::write_report(result, o.out_dir);
   for (const model_gap::QuestionResult* q : {&result.sensor, &result.command}) {
     if (q == &result.command && !result.command_assessed) continue;
-    std::cout << model_gap::question_title(q->question) << ": " << model_gap::verdict_name(q->verdict)
-              << "\n  " << q->summary << "\n";
+    std::cout << model_gap::question_title(q->question) << ": "
+              << model_gap::verdict_name(q->verdict) << "\n  " << q->summary << "\n";
     for (const auto& e : q->named) {
       const bool partial = e.observable_combinations < e.keys.size();
       for (std::size_t i = 0; i < e.keys.size(); ++i) {
@@ -40,20 +39,21 @@ int run_gap(const GapCommandOptions& o) {
                   << (partial ? e.partial_sigmas[i] : e.sigmas[i]) << "\n";
       }
       if (partial) {
-        std::cout << "    (the run fixes " << e.observable_combinations << " of " << e.keys.size()
-                  << " combinations of these; the rest stay at the model's values, and each +- is of"
-                     " what the run fixes)\n";
+        std::cout
+            << "    (the run fixes " << e.observable_combinations << " of " << e.keys.size()
+            << " combinations of these; the rest stay at the model's values, and each +- is of"
+               " what the run fixes)\n";
       }
     }
   }
   for (const auto& p : result.pose_gaps) {
     std::cout << "  " << model_gap::question_title(p.question) << " replay: final position error "
-              << std::setprecision(4) << p.final_position_m_before << " m -> " << p.final_position_m_after
-              << " m, final heading error " << p.final_heading_rad_before << " rad -> "
-              << p.final_heading_rad_after << " rad\n";
+              << std::setprecision(4) << p.final_position_m_before << " m -> "
+              << p.final_position_m_after << " m, final heading error "
+              << p.final_heading_rad_before << " rad -> " << p.final_heading_rad_after << " rad\n";
   }
-  std::cout << "report: " << o.out_dir << "/report.md (" << std::setprecision(3) << result.wall_time_s
-            << " s)\n";
+  std::cout << "report: " << o.out_dir << "/report.md (" << std::setprecision(3)
+            << result.wall_time_s << " s)\n";
   return 0;
 }
 
@@ -79,8 +79,9 @@ void add_gap_command(CLI::App& app, int& exit_code) {
                   "significance (normal deviates) an effect needs to be named")
       ->capture_default_str()
       ->check(CLI::Range(2.0, 20.0));
-  cmd->add_flag("--sensor-only", options->gap.sensor_only,
-                "decide only the sensor-to-pose question (for runs whose commands were not logged)");
+  cmd->add_flag(
+      "--sensor-only", options->gap.sensor_only,
+      "decide only the sensor-to-pose question (for runs whose commands were not logged)");
   cmd->callback([options, &exit_code] { exit_code = run_gap(*options); });
 }
 

@@ -2,7 +2,6 @@
 // swivel-lab: the offline tools. Subcommands register themselves through commands.inc.
 
 #include <CLI/CLI.hpp>
-
 #include <exception>
 #include <iostream>
 #include <string>

@@ -4,8 +4,6 @@
 // results.json and two gnuplot PNGs.
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +14,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -25,9 +24,9 @@
 
 #include "docent_experiment.hpp"
 #include "gnuplot.hpp"
-#include "swivel/stats/summary.hpp"
 #include "swivel/robot_model_io.hpp"
 #include "swivel/shipped_config.hpp"
+#include "swivel/stats/summary.hpp"
 
 namespace swivel::lab {
 namespace {
@@ -46,9 +45,15 @@ constexpr std::array<std::array<double, kPaperMethods>, 2> kPaperMaxCm{{
     {7.38, 7.33, 2.30},
 }};
 constexpr std::array<std::array<std::array<double, kPaperMethods>, kPaperRuns>, 2> kPaperMeanCm{{
-    {{{3.77, 1.80, 1.50}, {14.29, 12.83, 12.21}, {9.94, 8.49, 6.01}, {1.37, 1.38, 1.34},
+    {{{3.77, 1.80, 1.50},
+      {14.29, 12.83, 12.21},
+      {9.94, 8.49, 6.01},
+      {1.37, 1.38, 1.34},
       {0.91, 0.21, 0.18}}},
-    {{{0.94, 0.67, 0.54}, {3.89, 1.80, 1.76}, {2.67, 2.58, 2.31}, {1.93, 0.79, 0.75},
+    {{{0.94, 0.67, 0.54},
+      {3.89, 1.80, 1.76},
+      {2.67, 2.58, 2.31},
+      {1.93, 0.79, 0.75},
       {4.01, 4.06, 2.85}}},
 }};
 // The paper's stated claims: max-error reduction of LCALSM vs E/G per scenario, and how much
@@ -172,45 +177,51 @@ double reduction(double reference, double value) {
   return reference > 0.0 ? (reference - value) / reference : 0.0;
 }
 
-std::vector<std::string> assumptions(const RobotModel& nominal,
-                                      const DocentExperimentConfig& c) {
+std::vector<std::string> assumptions(const RobotModel& nominal, const DocentExperimentConfig& c) {
   const DocentErrorModel& e = c.errors;
   const DocentDriveProfile& d = c.drive;
   const auto samples = static_cast<int>(std::lround(8.0 / c.sample_spacing_m));
   return {
       "robot: " + nominal.name + " (nominal model " + nominal.source_file + "): wheel radii " +
           fixed(nominal.differential.wheel_radius_left_m, 3) + " m, track " +
-          fixed(nominal.differential.track_width_m, 2) + " m; odometry and estimators use only "
+          fixed(nominal.differential.track_width_m, 2) +
+          " m; odometry and estimators use only "
           "this nominal model",
       "corridor 8 m x 10 m; S1 (0,3) -> (8,3), S2 (0,6) -> (8,6); " + std::to_string(c.runs) +
           " runs each, seed " + std::to_string(c.seed),
       "driving: still for " + fixed(d.still_before_s, 1) + " s (gyro running), then ramp at " +
-          fixed(d.accel_mps2, 2) + " m/s^2 to " + fixed(d.cruise_speed_mps, 2) +
-          " m/s, brake at " + fixed(d.accel_mps2, 2) + " m/s^2 to stop at x = 8 m; a line "
+          fixed(d.accel_mps2, 2) + " m/s^2 to " + fixed(d.cruise_speed_mps, 2) + " m/s, brake at " +
+          fixed(d.accel_mps2, 2) +
+          " m/s^2 to stop at x = 8 m; a line "
           "follower on the TRUE pose keeps the robot on the corridor line (stand-in for the "
           "paper's guided straight runs), so truth is straight and the errors are the "
           "estimators'",
       "true robot drawn per run (unknown to the estimators): gyro bias N(0, " +
-          fixed(e.gyro_bias_sigma_radps * kDegPerRad, 3) + " deg/s) (residual after a start-up "
-          "bias calibration), gyro scale 1 + N(0, " + fixed(e.gyro_scale_sigma * 100.0, 2) +
-          " %), each wheel radius nominal x (1 + U(-" + fixed(e.wheel_radius_error_max * 100.0, 2) +
-          " %, +" + fixed(e.wheel_radius_error_max * 100.0, 2) + " %))",
+          fixed(e.gyro_bias_sigma_radps * kDegPerRad, 3) +
+          " deg/s) (residual after a start-up "
+          "bias calibration), gyro scale 1 + N(0, " +
+          fixed(e.gyro_scale_sigma * 100.0, 2) + " %), each wheel radius nominal x (1 + U(-" +
+          fixed(e.wheel_radius_error_max * 100.0, 2) + " %, +" +
+          fixed(e.wheel_radius_error_max * 100.0, 2) + " %))",
       "sensors: wheel encoders quantized at " +
           std::to_string(nominal.sensors.wheel_encoder_counts_per_rev) +
           " counts/rev; gyro white noise " + fixed(e.gyro_noise_radps, 4) +
           " rad/s per sample (a MEMS yaw gyro of the R1050K's class; values assumed, not "
-          "from a datasheet); random wheel slip " + fixed(e.wheel_slip_std * 100.0, 2) +
-          " % (1-sigma, Gauss-Markov, " + fixed(e.slip_correlation_time_s, 1) + " s); no "
+          "from a datasheet); random wheel slip " +
+          fixed(e.wheel_slip_std * 100.0, 2) + " % (1-sigma, Gauss-Markov, " +
+          fixed(e.slip_correlation_time_s, 1) +
+          " s); no "
           "motion capture",
-      "loop rate " + fixed(d.rate_hz, 0) + " Hz; error = distance between estimate and truth "
-          "where the truth crosses every " + fixed(c.sample_spacing_m, 2) + " m (" +
-          std::to_string(samples) + " samples per run)",
+      "loop rate " + fixed(d.rate_hz, 0) +
+          " Hz; error = distance between estimate and truth "
+          "where the truth crosses every " +
+          fixed(c.sample_spacing_m, 2) + " m (" + std::to_string(samples) + " samples per run)",
       "methods: E/G (gyro heading, eq. (1)-(7), nominal gyro scale and bias); LCAKF (kalman "
-          "mode lcakf, default noise); LCALSM (lsm mode paper, k = 10, a point every 0.02 m, "
-          "real-time output); extras marked *: LCALSM-HA* = lsm mode heading_aligned (variant), "
-          "EKF* = kalman mode ekf (pose + gyro bias, no pose fixes)",
+      "mode lcakf, default noise); LCALSM (lsm mode paper, k = 10, a point every 0.02 m, "
+      "real-time output); extras marked *: LCALSM-HA* = lsm mode heading_aligned (variant), "
+      "EKF* = kalman mode ekf (pose + gyro bias, no pose fixes)",
       "the simulator has no position-dependent effects: S1 and S2 differ only by their "
-          "random draws",
+      "random draws",
   };
 }
 
@@ -267,8 +278,9 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
          << pad(fixed(run.draw.gyro_bias_radps * kDegPerRad, 4), 17)
          << pad(fixed(run.draw.gyro_scale, 4), 12)
          << pad(fixed(run.draw.wheel_radius_scale_left, 5), 14)
-         << pad(fixed(run.draw.wheel_radius_scale_right, 5), 15) << pad(fixed(run.duration_s, 1), 12)
-         << pad(fixed(run.ekf_bias_radps * kDegPerRad, 4), 16) << '\n';
+         << pad(fixed(run.draw.wheel_radius_scale_right, 5), 15)
+         << pad(fixed(run.duration_s, 1), 12) << pad(fixed(run.ekf_bias_radps * kDegPerRad, 4), 16)
+         << '\n';
     }
   }
 
@@ -312,8 +324,8 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
 
   constexpr std::size_t kRatio = 15;
   os << "\nTable 3. Reduction ratios (%), mean+-standard error over runs\n"
-     << left("", 46) << pad("S1", kRatio) << pad("paper", 8) << pad("S2", kRatio)
-     << pad("paper", 8) << '\n';
+     << left("", 46) << pad("S1", kRatio) << pad("paper", 8) << pad("S2", kRatio) << pad("paper", 8)
+     << '\n';
   auto ratio_row = [&](const std::string& label, auto ours_fn, auto paper_fn) {
     os << left(label, 46);
     for (std::size_t s = 0; s < results.size(); ++s) {
@@ -345,10 +357,12 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
       return 100.0 * paper_derived(s).mean_reduction_vs_eg[m];
     };
   };
-  ratio_row("mean-error reduction vs E/G: LCAKF", mean_red(DocentMethod::kLcakf), paper_mean_red(1));
+  ratio_row("mean-error reduction vs E/G: LCAKF", mean_red(DocentMethod::kLcakf),
+            paper_mean_red(1));
   ratio_row("mean-error reduction vs E/G: LCALSM", mean_red(DocentMethod::kLcalsmPaper),
             paper_mean_red(2));
-  ratio_row("mean-error reduction vs E/G: LCALSM-HA*", mean_red(DocentMethod::kLcalsmHeading), none);
+  ratio_row("mean-error reduction vs E/G: LCALSM-HA*", mean_red(DocentMethod::kLcalsmHeading),
+            none);
   ratio_row("mean-error reduction vs E/G: EKF*", mean_red(DocentMethod::kEkf), none);
   ratio_row(
       "LCALSM's mean-error reduction minus LCAKF's",
@@ -359,7 +373,8 @@ void print_tables(std::ostream& os, const std::vector<DocentScenarioResult>& res
       });
   os << "  mean-error reductions are per run (E/G - method)/E/G, averaged over runs; the paper "
         "column is recomputed\n  from its Table 2 with that definition. The paper states "
-     << fixed(kPaperAdvantageOverLcakfPct) << " % on average for the last row without a "
+     << fixed(kPaperAdvantageOverLcakfPct)
+     << " % on average for the last row without a "
         "definition.\n  Max-error reductions use Table 1; their standard error pairs each "
         "run's maxima (first order).\n";
 
@@ -507,7 +522,8 @@ void write_plot_data(const fs::path& dir, const std::vector<DocentScenarioResult
     traj << '\n' << std::setprecision(9);
     for (const DocentTracePoint& p : sr.runs.front().trace) {
       traj << p.t_s << ' ' << p.truth.x_m << ' ' << p.truth.y_m;
-      for (DocentMethod m : kMethods) traj << ' ' << p.estimate[idx(m)].x_m << ' ' << p.estimate[idx(m)].y_m;
+      for (DocentMethod m : kMethods)
+        traj << ' ' << p.estimate[idx(m)].x_m << ' ' << p.estimate[idx(m)].y_m;
       traj << '\n';
     }
     std::ofstream err(dir / ("errors_" + sr.scenario.name + ".dat"));
@@ -551,7 +567,8 @@ void write_plots(const fs::path& dir, const std::vector<DocentScenarioResult>& r
        "set label 1 'S1' at 8.1,3\nset label 2 'S2' at 8.1,6\n";
   g << "plot";
   for (std::size_t s = 0; s < results.size(); ++s) {
-    const std::string file = gnuplot_quote(dir / ("trajectory_" + results[s].scenario.name + ".dat"));
+    const std::string file =
+        gnuplot_quote(dir / ("trajectory_" + results[s].scenario.name + ".dat"));
     g << (s == 0 ? " " : ", ") << file << " using 2:3 with lines lw 2 lc rgb 'black' title '"
       << results[s].scenario.name << " truth'";
     g << ", " << file << " using 4:5 with lines " << styles[0] << " title '"
@@ -562,16 +579,15 @@ void write_plots(const fs::path& dir, const std::vector<DocentScenarioResult>& r
   // E/G drawn wide underneath: the methods fed from it often coincide with it.
   for (const DocentScenarioResult& sr : results) {
     const std::string file = gnuplot_quote(dir / ("trajectory_" + sr.scenario.name + ".dat"));
-    g << "set title '" << sr.scenario.name << ": lateral offset from the line y = "
-      << fixed(sr.scenario.line_y_m, 1) << " m'\nset ylabel 'y - line (cm)'\nplot " << file
-      << " using 2:(100*($3-" << sr.scenario.line_y_m
-      << ")) with lines lw 2 lc rgb 'black' title 'truth'";
+    g << "set title '" << sr.scenario.name
+      << ": lateral offset from the line y = " << fixed(sr.scenario.line_y_m, 1)
+      << " m'\nset ylabel 'y - line (cm)'\nplot " << file << " using 2:(100*($3-"
+      << sr.scenario.line_y_m << ")) with lines lw 2 lc rgb 'black' title 'truth'";
     for (DocentMethod m : kMethods) {
       const std::size_t col = 4 + 2 * idx(m);
-      g << ", " << file << " using " << col << ":(100*($" << col + 1 << "-"
-        << sr.scenario.line_y_m << ")) with lines lw " << (m == DocentMethod::kEg ? 4 : 1.5)
-        << ' ' << styles[idx(m)] << " title '"
-        << docent_method_label(m) << "'";
+      g << ", " << file << " using " << col << ":(100*($" << col + 1 << "-" << sr.scenario.line_y_m
+        << ")) with lines lw " << (m == DocentMethod::kEg ? 4 : 1.5) << ' ' << styles[idx(m)]
+        << " title '" << docent_method_label(m) << "'";
     }
     g << '\n';
   }
@@ -590,8 +606,8 @@ void write_plots(const fs::path& dir, const std::vector<DocentScenarioResult>& r
     for (DocentMethod m : kMethods) {
       g << (idx(m) == 0 ? " " : ", ") << file << " using ($1-" << sr.scenario.start_x_m
         << "):" << idx(m) + 2 << " with linespoints pt 7 ps 0.4 lw "
-        << (m == DocentMethod::kEg ? 4 : 1.5) << ' ' << styles[idx(m)]
-        << " title '" << docent_method_label(m) << "'";
+        << (m == DocentMethod::kEg ? 4 : 1.5) << ' ' << styles[idx(m)] << " title '"
+        << docent_method_label(m) << "'";
     }
     g << '\n';
   }
@@ -622,12 +638,12 @@ int run_reproduce_docent(const DocentCommandOptions& o) {
   print_tables(tables, results, summaries, lines);
   std::cout << tables.str();
   std::ofstream(dir / "tables.txt") << tables.str();
-  std::ofstream(dir / "results.json") << to_json(nominal, config, results, summaries, lines).dump(2)
-                                      << '\n';
+  std::ofstream(dir / "results.json")
+      << to_json(nominal, config, results, summaries, lines).dump(2) << '\n';
   write_plots(dir, results);
   std::cout << "\nwrote " << (dir / "results.json").string() << ", "
-            << (dir / "trajectories.png").string() << ", " << (dir / "errors.png").string()
-            << ", " << (dir / "tables.txt").string() << '\n';
+            << (dir / "trajectories.png").string() << ", " << (dir / "errors.png").string() << ", "
+            << (dir / "tables.txt").string() << '\n';
   return 0;
 }
 

@@ -3,7 +3,6 @@
 // the nominal model's inverse kinematics along a standard trajectory and write a run log.
 
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -54,8 +53,8 @@ int run_simulate(const SimulateOptions& o) {
   const RobotModel nominal = load_robot_model(o.model_file);
   RobotModel truth = o.true_model_file.empty() ? nominal : load_robot_model(o.true_model_file);
   if (truth.drivetrain != nominal.drivetrain || truth.module_count() != nominal.module_count()) {
-    throw std::invalid_argument(o.true_model_file +
-                                ": drivetrain or module count differs from " + o.model_file);
+    throw std::invalid_argument(o.true_model_file + ": drivetrain or module count differs from " +
+                                o.model_file);
   }
   for (const std::string& e : o.effects) sim::set_effect(truth, e);
 
@@ -103,8 +102,9 @@ int run_simulate(const SimulateOptions& o) {
   Twist2 calibration_twist;
   if (kind == TrajectoryKind::kCalibration &&
       !controller.calibration(motion, command, calibration_twist)) {
-    throw std::invalid_argument("calibration motion impossible: a free caster's steering axis "
-                                "lies within its caster offset of the locked pivot");
+    throw std::invalid_argument(
+        "calibration motion impossible: a free caster's steering axis "
+        "lies within its caster offset of the locked pivot");
   }
   if (kind == TrajectoryKind::kCalibration && o.wheel_drive == "torque") {
     // As the paper and the daemon's procedure drive them: the wheel-rate setpoints only set
@@ -115,9 +115,9 @@ int run_simulate(const SimulateOptions& o) {
   }
 
   RunLogHeader header = run_log_header(nominal);
-  header.comments.push_back("source: swivel-lab simulate, trajectory " + o.trajectory +
-                            ", rate " + format(o.rate_hz) + " Hz, seed " +
-                            std::to_string(o.seed) + ", noise " + o.noise);
+  header.comments.push_back("source: swivel-lab simulate, trajectory " + o.trajectory + ", rate " +
+                            format(o.rate_hz) + " Hz, seed " + std::to_string(o.seed) + ", noise " +
+                            o.noise);
   if (kind == TrajectoryKind::kCalibration) {
     header.comments.push_back("calibration: locked_module " + std::to_string(o.locked_module) +
                               ", locked_steer_rad " + format(motion.locked_steer_meas_rad) +
@@ -144,12 +144,13 @@ int run_simulate(const SimulateOptions& o) {
     writer.write(sim::make_run_log_sample(reading, twist));
     if (k == steps) break;
     if (world.step(dt_s, command) != Status::kOk) {
-      throw std::runtime_error(std::string("simulation failed at t = ") + format(t_s) + " s: " +
-                               world.last_error());
+      throw std::runtime_error(std::string("simulation failed at t = ") + format(t_s) +
+                               " s: " + world.last_error());
     }
     if (report_progress && k == next_report) {
-      std::cerr << "simulate: " << std::llround(100.0 * static_cast<double>(k) / static_cast<double>(steps)) << "% (" << format(t_s) << " of "
-                << format(duration_s) << " s)\n";
+      std::cerr << "simulate: "
+                << std::llround(100.0 * static_cast<double>(k) / static_cast<double>(steps))
+                << "% (" << format(t_s) << " of " << format(duration_s) << " s)\n";
       next_report += steps / 10;
     }
   }
@@ -200,8 +201,7 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--scrub-std", options->lateral_scrub_std,
                   "random lateral scrub, fraction of speed 1-sigma (default off)")
       ->check(CLI::Range(0.0, 0.5));
-  cmd->add_option("--locked-module", options->locked_module,
-                  "calibration: the locked module, 1..N")
+  cmd->add_option("--locked-module", options->locked_module, "calibration: the locked module, 1..N")
       ->capture_default_str();
   cmd->add_option("--locked-steer-deg", options->locked_steer_deg,
                   "calibration: measured steering angle of the locked module, deg")

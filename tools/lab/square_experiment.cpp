@@ -27,8 +27,9 @@ SquareRunResult run_square(const RobotModel& truth, const RobotModel& controller
                            const SquareRunOptions& options) {
   if (truth.drivetrain != DrivetrainKind::kSwpc || controller.drivetrain != DrivetrainKind::kSwpc ||
       truth.modules.size() != controller.modules.size()) {
-    throw std::invalid_argument("square: true and controller models must be swpc robots with "
-                                "the same module count");
+    throw std::invalid_argument(
+        "square: true and controller models must be swpc robots with "
+        "the same module count");
   }
   const std::size_t n = controller.modules.size();
   const double dt_s = 1.0 / options.rate_hz;

@@ -33,10 +33,10 @@ struct SquareRunOptions {
 struct SquareRunResult {
   Pose2 true_end;
   Pose2 odometry_end;
-  double position_error_m = 0.0;  ///< |true end - commanded end|
+  double position_error_m = 0.0;   ///< |true end - commanded end|
   double heading_error_rad = 0.0;  ///< |wrap(true end yaw - commanded end yaw)|
   double duration_s = 0.0;
-  bool finished = false;  ///< the follower reached its last corner before max_duration_s
+  bool finished = false;     ///< the follower reached its last corner before max_duration_s
   std::vector<Pose2> trace;  ///< true poses
 };
 

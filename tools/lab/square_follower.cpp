@@ -16,8 +16,8 @@ double step_towards(double from, double to, double max_step) {
 
 }  // namespace
 
-SquareFollower::SquareFollower(const Pose2& start, double side_m, int laps,
-                               bool counter_clockwise, const SquareFollowerLimits& limits)
+SquareFollower::SquareFollower(const Pose2& start, double side_m, int laps, bool counter_clockwise,
+                               const SquareFollowerLimits& limits)
     : limits_(limits) {
   const double turn = counter_clockwise ? 0.5 * std::numbers::pi : -0.5 * std::numbers::pi;
   Pose2 at = start;

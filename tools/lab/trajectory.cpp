@@ -19,8 +19,8 @@ constexpr double kStopAndGoSpeedMps = 0.4;
 
 const std::vector<std::string>& trajectory_names() {
   static const std::vector<std::string> names = {
-      "straight", "arc", "spin", "figure8", "stop-and-go", "square", "strafe",
-      "spin-translate", "calibration"};
+      "straight", "arc",    "spin",           "figure8",    "stop-and-go",
+      "square",   "strafe", "spin-translate", "calibration"};
   return names;
 }
 
@@ -64,8 +64,7 @@ Trajectory::Trajectory(TrajectoryKind kind, double duration_s)
       segments_ = {{kSquareSideM / kSquareSpeedMps + kRampS, {kSquareSpeedMps, 0.0, 0.0}, true},
                    {0.5 * kPi / kYawRateRadps + kRampS, {0.0, 0.0, kYawRateRadps}, true}};
       break;
-    default:
-      break;
+    default: break;
   }
   for (const Segment& s : segments_) period_s_ += s.duration_s;
 }

@@ -45,10 +45,11 @@ void print_modules(const swivel_msg_CalibrationResult& s) {
               "d [mm]", "r [mm]");
   for (std::uint32_t i = 0; i < s.modules._length; ++i) {
     const auto& m = s.modules._buffer[i];
-    std::printf("%-6u %10.3f +- %8.3f %10.3f +- %8.3f %8.4f +- %7.4f %8.3f +- %7.3f %8.3f +- %7.3f\n",
-                i + 1, m.x_m * 1e3, m.sigma_x_m * 1e3, m.y_m * 1e3, m.sigma_y_m * 1e3,
-                m.delta_rad * kRadToDeg, m.sigma_delta_rad * kRadToDeg, m.d_m * 1e3,
-                m.sigma_d_m * 1e3, m.r_m * 1e3, m.sigma_r_m * 1e3);
+    std::printf(
+        "%-6u %10.3f +- %8.3f %10.3f +- %8.3f %8.4f +- %7.4f %8.3f +- %7.3f %8.3f +- %7.3f\n",
+        i + 1, m.x_m * 1e3, m.sigma_x_m * 1e3, m.y_m * 1e3, m.sigma_y_m * 1e3,
+        m.delta_rad * kRadToDeg, m.sigma_delta_rad * kRadToDeg, m.d_m * 1e3, m.sigma_d_m * 1e3,
+        m.r_m * 1e3, m.sigma_r_m * 1e3);
   }
 }
 

@@ -134,9 +134,9 @@ std::string resolve_robot(Client& client, const std::string& requested,
   }
   if (interrupted()) throw std::runtime_error("interrupted");
   if (seen.empty()) {
-    throw std::runtime_error("no swiveld answered within " + seconds_text(timeout) +
-                             " (no robot state on the domain; DDS configuration: " +
-                             dds::describe_tool_config() + ")");
+    throw std::runtime_error(
+        "no swiveld answered within " + seconds_text(timeout) +
+        " (no robot state on the domain; DDS configuration: " + dds::describe_tool_config() + ")");
   }
   std::string list;
   for (const auto& id : seen) list += (list.empty() ? "" : ", ") + id;
@@ -145,7 +145,8 @@ std::string resolve_robot(Client& client, const std::string& requested,
                              seconds_text(timeout) + "; robots on the domain: " + list);
   }
   if (seen.size() > 1) {
-    throw std::runtime_error("several robots on the domain (" + list + "): choose one with --robot");
+    throw std::runtime_error("several robots on the domain (" + list +
+                             "): choose one with --robot");
   }
   return *seen.begin();
 }

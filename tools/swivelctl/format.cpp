@@ -82,7 +82,9 @@ nlohmann::json to_json(const swivel_msg_ModuleStates& s) {
                        {"wheel_rate_cmd_radps", m.wheel_rate_cmd_radps},
                        {"wheel_rate_meas_radps", m.wheel_rate_meas_radps}});
   }
-  return {{"robot_id", str(s.robot_id)}, {"cycle", s.cycle}, {"stamp_s", s.stamp_s},
+  return {{"robot_id", str(s.robot_id)},
+          {"cycle", s.cycle},
+          {"stamp_s", s.stamp_s},
           {"modules", modules}};
 }
 
@@ -116,23 +118,29 @@ nlohmann::json to_json(const swivel_msg_CalibrationResult& s) {
   nlohmann::json modules = nlohmann::json::array();
   for (std::uint32_t i = 0; i < s.modules._length; ++i) {
     const auto& m = s.modules._buffer[i];
-    modules.push_back({{"x_m", m.x_m}, {"y_m", m.y_m}, {"delta_rad", m.delta_rad},
-                       {"d_m", m.d_m}, {"r_m", m.r_m}, {"sigma_x_m", m.sigma_x_m},
-                       {"sigma_y_m", m.sigma_y_m}, {"sigma_delta_rad", m.sigma_delta_rad},
-                       {"sigma_d_m", m.sigma_d_m}, {"sigma_r_m", m.sigma_r_m}});
+    modules.push_back({{"x_m", m.x_m},
+                       {"y_m", m.y_m},
+                       {"delta_rad", m.delta_rad},
+                       {"d_m", m.d_m},
+                       {"r_m", m.r_m},
+                       {"sigma_x_m", m.sigma_x_m},
+                       {"sigma_y_m", m.sigma_y_m},
+                       {"sigma_delta_rad", m.sigma_delta_rad},
+                       {"sigma_d_m", m.sigma_d_m},
+                       {"sigma_r_m", m.sigma_r_m}});
   }
   return {{"robot_id", str(s.robot_id)}, {"stamp_s", s.stamp_s}, {"status", str(s.status)},
-          {"progress", s.progress}, {"text", str(s.text)}, {"modules", modules}};
+          {"progress", s.progress},      {"text", str(s.text)},  {"modules", modules}};
 }
 
 std::string to_line(const swivel_msg_RobotState& s) {
   return format(
       "%s t=%.3fs x=%.4fm y=%.4fm yaw=%.4frad vx=%.3fm/s vy=%.3fm/s wz=%.3frad/s mode=%s "
       "localization=%s fault=%s%s%s%s faults=%llu",
-      str(s.robot_id).c_str(), s.stamp_s, s.x_m, s.y_m, s.yaw_rad, s.vx_mps, s.vy_mps,
-      s.wz_radps, mode_name(s.mode), str(s.localization_plugin).c_str(),
-      str(s.fault_text).c_str(), detail_open(s.fault_detail), str(s.fault_detail).c_str(),
-      detail_close(s.fault_detail), static_cast<unsigned long long>(s.fault_count));
+      str(s.robot_id).c_str(), s.stamp_s, s.x_m, s.y_m, s.yaw_rad, s.vx_mps, s.vy_mps, s.wz_radps,
+      mode_name(s.mode), str(s.localization_plugin).c_str(), str(s.fault_text).c_str(),
+      detail_open(s.fault_detail), str(s.fault_detail).c_str(), detail_close(s.fault_detail),
+      static_cast<unsigned long long>(s.fault_count));
 }
 
 std::string to_line(const swivel_msg_ModuleStates& s) {
@@ -163,8 +171,7 @@ std::string to_line(const swivel_msg_Diagnostics& s) {
 
 std::string to_line(const swivel_msg_CalibrationResult& s) {
   return format("%s status=%s progress=%.0f%% modules=%u %s", str(s.robot_id).c_str(),
-                str(s.status).c_str(), 100.0 * s.progress, s.modules._length,
-                str(s.text).c_str());
+                str(s.status).c_str(), 100.0 * s.progress, s.modules._length, str(s.text).c_str());
 }
 
 }  // namespace swivel::ctl

@@ -3,7 +3,6 @@
 // How swivelctl prints samples: one line each, or one JSON object per line.
 
 #include <nlohmann/json.hpp>
-
 #include <string>
 
 #include "swivel.h"

@@ -2,7 +2,6 @@
 // swivelctl: a command-line client of running swiveld daemons over DDS.
 
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -45,8 +44,8 @@ int echo_topic(Client& client, const dds_topic_descriptor_t* desc, const char* t
     if (!client.wait_for_data({reader}, Seconds(common.timeout_s))) {
       if (interrupted()) return printed > 0 ? 0 : 130;
       std::cerr << "swivelctl: no " << topic << " sample"
-                << (common.robot.empty() ? "" : " from robot '" + common.robot + "'")
-                << " within " << seconds_text(Seconds(common.timeout_s))
+                << (common.robot.empty() ? "" : " from robot '" + common.robot + "'") << " within "
+                << seconds_text(Seconds(common.timeout_s))
                 << (printed == 0 ? " (is swiveld running on this DDS domain? " +
                                        dds::describe_tool_config() + ")"
                                  : "")
@@ -110,11 +109,12 @@ int run_drive(double vx, double vy, double wz, double for_s, double rate_hz,
     command.wz_radps = z;
     dds::check(dds_write(writer, &command), "dds_write(velocity command)");
   };
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-      Seconds(1.0 / rate_hz));
+  const auto period =
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(Seconds(1.0 / rate_hz));
   const auto start = std::chrono::steady_clock::now();
   auto next = start;
-  while (!interrupted() && (for_s <= 0 || std::chrono::steady_clock::now() - start < Seconds(for_s))) {
+  while (!interrupted() &&
+         (for_s <= 0 || std::chrono::steady_clock::now() - start < Seconds(for_s))) {
     send(vx, vy, wz);
     next += period;
     std::this_thread::sleep_until(next);
@@ -199,23 +199,20 @@ int run_status(const CommonOptions& common, bool json) {
       std::snprintf(text, sizeof text, "%.1f", v.get<double>());
       return std::string(text);
     };
-    const std::string plugins =
-        r.diagnostics ? d["plugins"]["hardware"].get<std::string>() + "/" +
-                            d["plugins"]["drivetrain"].get<std::string>()
-                      : "-";
-    const std::string pose =
-        r.state ? std::to_string(r.state->x_m).substr(0, 7) + ", " +
-                      std::to_string(r.state->y_m).substr(0, 7) + ", " +
-                      std::to_string(r.state->yaw_rad).substr(0, 7)
-                : "-";
-    std::printf("%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s  %s\n", id.c_str(),
-                r.state ? mode_name(r.state->mode) : "-",
-                r.state ? r.localization.c_str() : "-", r.state ? r.fault.c_str() : "-",
-                plugins.c_str(), num("measured_rate_hz").c_str(), num("lateness", "p99_us").c_str(),
-                num("cycle_time", "p99_us").c_str(),
-                d.contains("overruns") ? std::to_string(d["overruns"].get<std::uint64_t>()).c_str()
-                                       : "-",
-                pose.c_str());
+    const std::string plugins = r.diagnostics ? d["plugins"]["hardware"].get<std::string>() + "/" +
+                                                    d["plugins"]["drivetrain"].get<std::string>()
+                                              : "-";
+    const std::string pose = r.state ? std::to_string(r.state->x_m).substr(0, 7) + ", " +
+                                           std::to_string(r.state->y_m).substr(0, 7) + ", " +
+                                           std::to_string(r.state->yaw_rad).substr(0, 7)
+                                     : "-";
+    std::printf(
+        "%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s  %s\n", id.c_str(),
+        r.state ? mode_name(r.state->mode) : "-", r.state ? r.localization.c_str() : "-",
+        r.state ? r.fault.c_str() : "-", plugins.c_str(), num("measured_rate_hz").c_str(),
+        num("lateness", "p99_us").c_str(), num("cycle_time", "p99_us").c_str(),
+        d.contains("overruns") ? std::to_string(d["overruns"].get<std::uint64_t>()).c_str() : "-",
+        pose.c_str());
   }
   if (json) std::cout << all.dump() << '\n';
   return 0;
@@ -291,7 +288,8 @@ int main(int argc, char** argv) {
   echo->add_option("topic", what, "state | modules | diagnostics | calibration")
       ->required()
       ->check(CLI::IsMember({"state", "modules", "diagnostics", "calibration"}));
-  echo->add_option("--count", count, "stop after N samples (0: never)")->check(CLI::NonNegativeNumber);
+  echo->add_option("--count", count, "stop after N samples (0: never)")
+      ->check(CLI::NonNegativeNumber);
   echo->add_flag("--json", json, "one JSON object per line");
   add_common(echo, true);
 
@@ -314,8 +312,9 @@ int main(int argc, char** argv) {
   add_common(reload, true);
 
   CLI::App* clear = app.add_subcommand(
-      "clear", "leave the active fault once its cause is gone (refused, with the cause, while "
-               "it persists)");
+      "clear",
+      "leave the active fault once its cause is gone (refused, with the cause, while "
+      "it persists)");
   add_common(clear, true);
 
   PoseRequest pose;

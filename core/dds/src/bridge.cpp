@@ -91,16 +91,16 @@ struct DdsBridge::Entities {
   dds_entity_t diagnostics_writer = 0;
   dds_entity_t calibration_writer = 0;
   dds_entity_t reply_writer = 0;
-  dds_entity_t odom_writer = 0;  ///< ROS 2, 0 when disabled
-  dds_entity_t tf_writer = 0;    ///< ROS 2, 0 when disabled or publish_tf is off
+  dds_entity_t odom_writer = 0;              ///< ROS 2, 0 when disabled
+  dds_entity_t tf_writer = 0;                ///< ROS 2, 0 when disabled or publish_tf is off
   dds_entity_t joint_states_writer = 0;      ///< ROS 2, 0 when disabled or no joints named
   dds_entity_t ros2_diagnostics_writer = 0;  ///< ROS 2, 0 when disabled
   dds_entity_t command_reader = 0;
   dds_entity_t motion_capture_reader = 0;
   dds_entity_t request_reader = 0;
   dds_entity_t set_pose_reader = 0;
-  dds_entity_t cmd_vel_reader = 0;      ///< ROS 2, 0 when disabled
-  dds_entity_t initialpose_reader = 0;  ///< ROS 2, 0 when disabled
+  dds_entity_t cmd_vel_reader = 0;        ///< ROS 2, 0 when disabled
+  dds_entity_t initialpose_reader = 0;    ///< ROS 2, 0 when disabled
   std::unique_ptr<SensorInputs> sensors;  ///< ROS 2 sensor topics, null when disabled
   dds_entity_t waitset = 0;
 
@@ -152,8 +152,8 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
   dds_->request_reader = reader(&swivel_msg_Request_desc, kRequestTopic, reader_qos.get());
   dds_->set_pose_reader = reader(&swivel_msg_SetPose_desc, kSetPoseTopic, reader_qos.get());
   if (options_.ros2.enabled) {
-    dds_->odom_writer = writer(&nav_msgs_msg_dds__Odometry__desc, options_.ros2.odom_topic(),
-                               writer_qos.get());
+    dds_->odom_writer =
+        writer(&nav_msgs_msg_dds__Odometry__desc, options_.ros2.odom_topic(), writer_qos.get());
     // Reliable, volatile, keep-last writers like the others: what tf2's listener,
     // robot_state_publisher and the diagnostic aggregator subscribe with (reliable or best
     // effort) matches them.
@@ -174,9 +174,8 @@ DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbac
                                              : &geometry_msgs_msg_dds__Twist__desc,
                options_.ros2.cmd_vel_topic(), cmd_vel_qos.get());
     // Reliable, as RViz and `ros2 topic pub` publish it: a one-off pose must not be lost.
-    dds_->initialpose_reader =
-        reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
-               options_.ros2.initialpose_topic(), reader_qos.get());
+    dds_->initialpose_reader = reader(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
+                                      options_.ros2.initialpose_topic(), reader_qos.get());
     dds_->sensors = std::make_unique<SensorInputs>(
         pp, options_.ros2, SensorCallbacks{callbacks_.on_gyro, callbacks_.on_pose_motion_capture});
   }
@@ -237,8 +236,8 @@ namespace {
 using PublishClock = std::chrono::steady_clock;  // CLOCK_MONOTONIC on Linux, like stamp_s
 
 PublishClock::time_point at_monotonic(double stamp_s) {
-  return PublishClock::time_point(std::chrono::duration_cast<PublishClock::duration>(
-      std::chrono::duration<double>(stamp_s)));
+  return PublishClock::time_point(
+      std::chrono::duration_cast<PublishClock::duration>(std::chrono::duration<double>(stamp_s)));
 }
 
 // The publisher follows the loop's phase. It sleeps until kEarly before the cycle it is to
@@ -260,14 +259,14 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
   // The default 50 us timer slack would be most of the age this schedule saves.
   prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   const double period_s = 1.0 / options_.publish_rate_hz;
-  const auto period = std::chrono::duration_cast<PublishClock::duration>(
-      std::chrono::duration<double>(period_s));
+  const auto period =
+      std::chrono::duration_cast<PublishClock::duration>(std::chrono::duration<double>(period_s));
   const auto diagnostics_period = std::chrono::duration_cast<PublishClock::duration>(
       std::chrono::duration<double>(1.0 / options_.diagnostics_rate_hz));
   auto next_diagnostics = PublishClock::now();
   std::uint64_t last_cycle = 0;
   bool have_last = false;
-  double due_stamp_s = 0.0;  // the next cycle to publish is the first stamped from here
+  double due_stamp_s = 0.0;           // the next cycle to publish is the first stamped from here
   PublishClock::time_point due_at{};  // when it is due (epoch: any new cycle is)
   bool warned = false;
   StateSnapshot snapshot;
@@ -756,9 +755,9 @@ void DdsBridge::take_set_poses() {
       // sigma * |sigma|: a negative sigma stays visible to the daemon's check as a negative
       // variance instead of hiding behind its square.
       const auto variance = [](double sigma) { return sigma * std::abs(sigma); };
-      sample.pose.covariance = {variance(p.sigma_x_m), 0.0, 0.0,
-                                0.0, variance(p.sigma_y_m), 0.0,
-                                0.0, 0.0, variance(p.sigma_yaw_rad)};
+      sample.pose.covariance = {variance(p.sigma_x_m),    0.0, 0.0, 0.0,
+                                variance(p.sigma_y_m),    0.0, 0.0, 0.0,
+                                variance(p.sigma_yaw_rad)};
     }
     sample.source = kSetPoseTopic;
     callbacks_.on_set_pose(sample);
@@ -768,8 +767,7 @@ void DdsBridge::take_set_poses() {
 void DdsBridge::take_ros2_initialposes() {
   if (dds_->initialpose_reader == 0) return;
   take_all<geometry_msgs_msg_dds__PoseWithCovarianceStamped_>(
-      dds_->initialpose_reader,
-      [this](const geometry_msgs_msg_dds__PoseWithCovarianceStamped_& m) {
+      dds_->initialpose_reader, [this](const geometry_msgs_msg_dds__PoseWithCovarianceStamped_& m) {
         requests_received_.fetch_add(1, std::memory_order_relaxed);
         const std::string frame = m.header.frame_id != nullptr ? m.header.frame_id : "";
         if (!frame.empty() && frame != options_.ros2.odom_frame_id) {

@@ -12,8 +12,7 @@ namespace swivel::dds {
 namespace {
 
 std::string ros2_topic(const std::string& ros_namespace, const char* name) {
-  return ros_namespace.empty() ? std::string("rt/") + name
-                               : "rt/" + ros_namespace + "/" + name;
+  return ros_namespace.empty() ? std::string("rt/") + name : "rt/" + ros_namespace + "/" + name;
 }
 
 bool valid_ros_name(const std::string& name) {
@@ -96,13 +95,9 @@ std::string Ros2Options::joint_states_topic() const {
   return ros2_topic(ros_namespace, "joint_states");
 }
 
-std::string Ros2Options::tf_topic() const {
-  return "rt/tf";
-}
+std::string Ros2Options::tf_topic() const { return "rt/tf"; }
 
-std::string Ros2Options::diagnostics_topic() const {
-  return "rt/diagnostics";
-}
+std::string Ros2Options::diagnostics_topic() const { return "rt/diagnostics"; }
 
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir) {

@@ -58,8 +58,8 @@ QosPtr run_samples_qos() {
 
 Participant::Participant(const ParticipantOptions& options) {
   if (!options.config_uri.empty()) ensure_domain(options.domain_id, options.config_uri);
-  handle_ = check(dds_create_participant(options.domain_id, nullptr, nullptr),
-                  "dds_create_participant");
+  handle_ =
+      check(dds_create_participant(options.domain_id, nullptr, nullptr), "dds_create_participant");
 }
 
 Participant::~Participant() {

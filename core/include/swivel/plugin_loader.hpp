@@ -27,8 +27,11 @@ class PluginInstance {
   PluginInstance() = default;
   PluginInstance(std::shared_ptr<PluginLibrary> library, Interface* instance,
                  void (*destroy)(void*), std::string name, std::string path)
-      : library_(std::move(library)), instance_(instance), destroy_(destroy),
-        name_(std::move(name)), path_(std::move(path)) {}
+      : library_(std::move(library)),
+        instance_(instance),
+        destroy_(destroy),
+        name_(std::move(name)),
+        path_(std::move(path)) {}
   PluginInstance(PluginInstance&& other) noexcept { *this = std::move(other); }
   PluginInstance& operator=(PluginInstance&& other) noexcept {
     if (this != &other) {
@@ -104,8 +107,7 @@ class PluginLoader {
 
  private:
   std::shared_ptr<PluginLibrary> open(std::uint32_t kind, const std::string& name,
-                                      const SwivelPluginDescriptor*& descriptor,
-                                      std::string& path);
+                                      const SwivelPluginDescriptor*& descriptor, std::string& path);
   std::shared_ptr<PluginLibrary> open_file(std::uint32_t kind, const std::string& file,
                                            const SwivelPluginDescriptor*& descriptor);
   static void* instantiate(const SwivelPluginDescriptor& descriptor, const std::string& path);

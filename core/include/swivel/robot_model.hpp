@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The robot model of README "Configuration reference: robot model": plain data shared by the daemon,
-// the plugins, the simulator and the offline tools. Loading and saving YAML lives in
+// The robot model of README "Configuration reference: robot model": plain data shared by the
+// daemon, the plugins, the simulator and the offline tools. Loading and saving YAML lives in
 // robot_model_io.hpp so that maths libraries can use these types without yaml-cpp.
 
 #include <map>
@@ -28,7 +28,7 @@ struct SwpcModuleParams {
 };
 
 struct GyroParams {
-  double scale = 1.0;        ///< k_g: measured = scale * true + bias + noise
+  double scale = 1.0;  ///< k_g: measured = scale * true + bias + noise
   double bias_rad_s = 0.0;
   double noise_rad_s = 0.0;  ///< white noise standard deviation
 };
@@ -48,15 +48,16 @@ struct SensorParams {
 
 /// What the robot's own motion controller enforces (the robot model's `limits:`). Read by the
 /// simulator, the model-gap replay and the daemon's command limiter; an absent limit is not
-/// applied. The first three keys are the common motion-controller ones; the velocity and jerk limits are Swivel's.
+/// applied. The first three keys are the common motion-controller ones; the velocity and jerk
+/// limits are Swivel's.
 struct MotionLimits {
-  std::optional<double> linear_velocity_mps;          ///< body speed, per axis (x, y)
+  std::optional<double> linear_velocity_mps;  ///< body speed, per axis (x, y)
   std::optional<double> angular_velocity_radps;
-  std::optional<double> linear_acceleration_mps2;     ///< body, per axis (x, y)
+  std::optional<double> linear_acceleration_mps2;  ///< body, per axis (x, y)
   std::optional<double> angular_acceleration_radps2;
-  std::optional<double> linear_jerk_mps3;             ///< body, per axis (x, y)
+  std::optional<double> linear_jerk_mps3;  ///< body, per axis (x, y)
   std::optional<double> angular_jerk_radps3;
-  std::optional<double> steering_rate_radps;          ///< swpc: per module
+  std::optional<double> steering_rate_radps;  ///< swpc: per module
 
   [[nodiscard]] bool any() const {
     return linear_velocity_mps || angular_velocity_radps || linear_acceleration_mps2 ||
@@ -73,10 +74,10 @@ using EffectParams = std::map<std::string, double>;
 struct RobotModel {
   std::string name;
   DrivetrainKind drivetrain = DrivetrainKind::kDifferential;
-  DifferentialParams differential;         ///< used when drivetrain is differential
-  std::vector<SwpcModuleParams> modules;   ///< used when drivetrain is swpc
+  DifferentialParams differential;        ///< used when drivetrain is differential
+  std::vector<SwpcModuleParams> modules;  ///< used when drivetrain is swpc
   SensorParams sensors;
-  MotionLimits limits;                     ///< absent keys: no limit
+  MotionLimits limits;                          ///< absent keys: no limit
   std::map<std::string, EffectParams> effects;  ///< empty in a nominal model
   std::string source_file;                      ///< where it was read from, for messages
 

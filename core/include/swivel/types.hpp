@@ -76,18 +76,18 @@ struct ActuatorCommand {
 /// Odometry from one pair of consecutive readings (drivetrain forward kinematics).
 struct OdometryIncrement {
   double dt_s = 0.0;
-  Pose2 delta;          ///< motion over dt in the robot frame at the start of the step
-  Twist2 twist;         ///< mean body twist over dt
+  Pose2 delta;            ///< motion over dt in the robot frame at the start of the step
+  Twist2 twist;           ///< mean body twist over dt
   double residual = 0.0;  ///< least-squares residual of the kinematic fit (slip indicator)
   bool valid = false;
 };
 
 /// Per-module state for the state snapshot.
 struct ModuleState {
-  double steer_angle_rad = 0.0;         ///< measured
-  double steer_rate_cmd_radps = 0.0;    ///< commanded
-  double wheel_rate_cmd_radps = 0.0;    ///< commanded
-  double wheel_rate_meas_radps = 0.0;   ///< measured
+  double steer_angle_rad = 0.0;        ///< measured
+  double steer_rate_cmd_radps = 0.0;   ///< commanded
+  double wheel_rate_cmd_radps = 0.0;   ///< commanded
+  double wheel_rate_meas_radps = 0.0;  ///< measured
 };
 
 static_assert(std::is_trivially_copyable_v<HardwareState>);

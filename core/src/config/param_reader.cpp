@@ -17,8 +17,7 @@ std::string format_number(double value) {
 }
 
 // "a number in [1, 10000]", "a number >= 0", "a number": whichever bounds are real.
-std::string range_text(const char* what, double min, double max, double lowest,
-                       double highest) {
+std::string range_text(const char* what, double min, double max, double lowest, double highest) {
   std::string text = what;
   const bool has_min = min > lowest;
   const bool has_max = max < highest;
@@ -133,9 +132,9 @@ void ParamReader::fail(const std::string& key, const std::string& message) const
 double ParamReader::number(const std::string& key, double min, double max) {
   known_.push_back(key);
   const YAML::Node value = lookup(node_, key, nullptr);
-  const std::string expected = "expected " + range_text("a number", min, max,
-                                                        -std::numeric_limits<double>::max(),
-                                                        std::numeric_limits<double>::max());
+  const std::string expected =
+      "expected " + range_text("a number", min, max, -std::numeric_limits<double>::max(),
+                               std::numeric_limits<double>::max());
   if (!value.IsDefined()) {
     // Missing keys are reported at the enclosing mapping.
     throw ConfigError(missing(*this, key, expected));
@@ -154,8 +153,7 @@ double ParamReader::number(const std::string& key, double min, double max) {
   return result;
 }
 
-double ParamReader::number_or(const std::string& key, double fallback, double min,
-                              double max) {
+double ParamReader::number_or(const std::string& key, double fallback, double min, double max) {
   if (!has(key)) {
     known_.push_back(key);
     return fallback;
@@ -283,10 +281,10 @@ void ParamReader::finish() const {
       known += (known.empty() ? "" : ", ") + k;
     }
     const std::string full = path_.empty() ? key : path_ + "." + key;
-    throw ConfigError(location(file_, it->first.Mark()) + ": " +
-                      (key.empty() ? path_ + ": non-text key" : full) + ": unknown key" +
-                      (known.empty() ? " (this mapping takes no keys)"
-                                     : " (known: " + known + ")"));
+    throw ConfigError(
+        location(file_, it->first.Mark()) + ": " + (key.empty() ? path_ + ": non-text key" : full) +
+        ": unknown key" +
+        (known.empty() ? " (this mapping takes no keys)" : " (known: " + known + ")"));
   }
 }
 

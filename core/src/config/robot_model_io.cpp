@@ -44,8 +44,8 @@ std::vector<SwpcModuleParams> read_swpc(ParamReader r) {
   const YAML::Node seq = r.sequence("modules");
   r.finish();
   if (seq.size() < 2 || seq.size() > kMaxModules) {
-    r.fail("modules", "expected between 2 and " + std::to_string(kMaxModules) +
-                          " modules, got " + std::to_string(seq.size()));
+    r.fail("modules", "expected between 2 and " + std::to_string(kMaxModules) + " modules, got " +
+                          std::to_string(seq.size()));
   }
   std::vector<SwpcModuleParams> modules;
   for (std::size_t i = 0; i < seq.size(); ++i) {
@@ -158,7 +158,8 @@ std::string num(double value) {
 // YAML 1.1/1.2 words that a plain scalar would turn into a bool or null.
 bool is_yaml_keyword(const std::string& value) {
   std::string lower;
-  for (const char c : value) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const char c : value)
+    lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   for (const char* word : {"true", "false", "null", "yes", "no", "on", "off", "y", "n", "~"}) {
     if (lower == word) return true;
   }
@@ -170,8 +171,8 @@ bool is_yaml_keyword(const std::string& value) {
 std::string text(const std::string& value) {
   bool plain = !value.empty() && !is_yaml_keyword(value);
   for (const char c : value) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
-                    (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '-' || c == '.';
     plain = plain && ok;
   }
   if (plain && !(value[0] >= '0' && value[0] <= '9') && value[0] != '-' && value[0] != '.') {
@@ -207,8 +208,8 @@ RobotModel parse_robot_model(const std::string& yaml_text, const std::string& so
   model.drivetrain = kind == "swpc" ? DrivetrainKind::kSwpc : DrivetrainKind::kDifferential;
   const std::string other = kind == "swpc" ? "differential" : "swpc";
   if (r.has(other)) {
-    r.fail(other, "section does not match drivetrain '" + kind + "' (expected a '" + kind +
-                      "' section)");
+    r.fail(other,
+           "section does not match drivetrain '" + kind + "' (expected a '" + kind + "' section)");
   }
   if (!r.has(kind)) {
     r.fail("", "missing required key '" + kind + "' (drivetrain is " + kind + ")");

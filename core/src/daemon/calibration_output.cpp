@@ -43,14 +43,14 @@ std::vector<std::string> calibration_output_dirs(const std::string& model_path) 
   }
   std::string own = fs::path(model_path).parent_path().string();
   if (own.empty()) own = ".";
-  if (dirs.empty() || fs::path(dirs.front()).lexically_normal() != fs::path(own).lexically_normal()) {
+  if (dirs.empty() ||
+      fs::path(dirs.front()).lexically_normal() != fs::path(own).lexically_normal()) {
     dirs.push_back(own);
   }
   return dirs;
 }
 
-SavedModel save_calibrated_model(RobotModel model, const std::string& model_path,
-                                 std::time_t now) {
+SavedModel save_calibrated_model(RobotModel model, const std::string& model_path, std::time_t now) {
   SavedModel saved;
   for (const std::string& dir : calibration_output_dirs(model_path)) {
     const std::string path = calibrated_model_path(model_path, now, dir);

@@ -31,7 +31,6 @@ struct SavedModel {
 
 /// Writes `model` (its source_file set to the file written) to the first folder of
 /// calibration_output_dirs() that takes it. Never throws for a failed write.
-SavedModel save_calibrated_model(RobotModel model, const std::string& model_path,
-                                 std::time_t now);
+SavedModel save_calibrated_model(RobotModel model, const std::string& model_path, std::time_t now);
 
 }  // namespace swivel::daemon

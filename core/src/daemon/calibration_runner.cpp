@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "calibration_runner.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <thread>
 #include <utility>
-
-#include <spdlog/spdlog.h>
 
 #include "calibration_output.hpp"
 #include "swivel/robot_model_io.hpp"
@@ -165,7 +165,8 @@ void CalibrationRunner::poll() {
     switch (outcome) {
       case rt::CalibrationOutcome::kFinished: {
         Calibration* calibration = instance_.get();
-        analysis_ = std::async(std::launch::async, [calibration] { return calibration->analyse(); });
+        analysis_ =
+            std::async(std::launch::async, [calibration] { return calibration->analyse(); });
         status_.progress = 1.0;
         status_.text = "recorded every run; analysing";
         publish_locked();
@@ -188,8 +189,7 @@ void CalibrationRunner::poll() {
     publish_locked();
     return;
   }
-  if (analysis_ &&
-      analysis_->wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+  if (analysis_ && analysis_->wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     finish_analysis_locked();
   }
 }
@@ -225,9 +225,9 @@ void CalibrationRunner::finish_analysis_locked() {
     return;
   }
   calibrated_file_ = saved.path;
-  set_status_locked("done", "calibrated model written to " + calibrated_file_ +
-                                "; to apply it, restart swiveld with robot_model: " +
-                                calibrated_file_);
+  set_status_locked("done",
+                    "calibrated model written to " + calibrated_file_ +
+                        "; to apply it, restart swiveld with robot_model: " + calibrated_file_);
   status_.progress = 1.0;
   publish_locked();
 }

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The daemon's side of a calibration (docs/architecture.md "Plugin kinds", calibration kind): creates and
-// configures the calibration plugin, hands it to the real-time loop, follows its progress,
-// takes it back when the loop lets go of it, analyses the recording on a worker thread,
+// The daemon's side of a calibration (docs/architecture.md "Plugin kinds", calibration kind):
+// creates and configures the calibration plugin, hands it to the real-time loop, follows its
+// progress, takes it back when the loop lets go of it, analyses the recording on a worker thread,
 // writes the calibrated robot model as a new file (calibration_output.hpp: the
 // service's state directory, else next to the nominal one) and reports
 // everything as CalibrationResult samples through a callback.

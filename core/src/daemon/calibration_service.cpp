@@ -39,9 +39,10 @@ CalibrationService::CalibrationService(const DaemonConfig& config, rt::ControlLo
         }
         publish_(sample);
       });
-  spdlog::info("calibration: plugin {} ready (swivelctl calibrate start); calibrated models "
-               "are written next to {}",
-               config.calibration.plugin, config.robot_model_path);
+  spdlog::info(
+      "calibration: plugin {} ready (swivelctl calibrate start); calibrated models "
+      "are written next to {}",
+      config.calibration.plugin, config.robot_model_path);
 }
 
 CalibrationService::~CalibrationService() = default;
@@ -78,12 +79,12 @@ dds::ReplySample CalibrationService::handle(const std::string& argument) {
       runner_->handle_request(argument);
       const dds::CalibrationSample status = runner_->status();
       reply.ok = true;
-      reply.text = (argument == "cancel" ? "cancel requested; " : "") + status.status + ": " +
-                   status.text;
+      reply.text =
+          (argument == "cancel" ? "cancel requested; " : "") + status.status + ": " + status.text;
     } else {
       runner_->handle_request(argument);
-      reply.text = "refused: unknown calibrate argument '" + argument +
-                   "' (start | cancel | status)";
+      reply.text =
+          "refused: unknown calibrate argument '" + argument + "' (start | cancel | status)";
     }
   } catch (const std::exception& e) {
     reply.text = "refused: " + std::string(e.what());

@@ -201,8 +201,8 @@ void Daemon::start_bridge() {
   };
   callbacks.on_request = [queue](const dds::RequestSample& request) { queue(request); };
   callbacks.on_set_pose = [queue](const dds::SetPoseSample& pose) { queue(pose); };
-  bridge_ = std::make_unique<dds::DdsBridge>(dds_options_, config_.robot.name,
-                                             std::move(callbacks));
+  bridge_ =
+      std::make_unique<dds::DdsBridge>(dds_options_, config_.robot.name, std::move(callbacks));
   bridge_->start();
   if (loop_->run_sample_period_s() > 0.0) {
     // The ring's only consumer: every sample the loop produced since its first cycle.
@@ -350,11 +350,10 @@ ReloadResult Daemon::reload(const std::string& trigger) {
                           "' refused the hand-over: " + refusal + "; '" + outgoing +
                           "' stays active");
       }
-      applied.push_back("localization " + outgoing + " -> " + fresh.localization.plugin +
-                        (outgoing == fresh.localization.plugin ? " (new parameters)" : "") +
-                        (swapped == LocalizationSwap::Result::kPending
-                             ? " (not taken by the loop yet)"
-                             : ""));
+      applied.push_back(
+          "localization " + outgoing + " -> " + fresh.localization.plugin +
+          (outgoing == fresh.localization.plugin ? " (new parameters)" : "") +
+          (swapped == LocalizationSwap::Result::kPending ? " (not taken by the loop yet)" : ""));
     }
     if (plan.log_level) {
       spdlog::set_level(spdlog::level::from_str(*plan.log_level));

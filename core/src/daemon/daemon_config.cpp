@@ -79,7 +79,7 @@ YAML::Node parse_yaml(const std::string& text, const std::string& file) {
 }  // namespace
 
 const std::vector<std::string>& log_level_names() {
-  static const std::vector<std::string> names{"trace", "debug", "info", "warn",
+  static const std::vector<std::string> names{"trace", "debug",    "info", "warn",
                                               "error", "critical", "off"};
   return names;
 }

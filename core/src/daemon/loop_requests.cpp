@@ -66,8 +66,8 @@ dds::ReplySample LoopRequests::clear(std::uint64_t request_id) {
     const std::string refusal = activate_hardware(hardware_);
     loop_.resume_hardware();
     if (!refusal.empty()) {
-      reply.text = "refused: hardware plugin '" + hardware_plugin_ +
-                   "' refused to re-activate: " + refusal;
+      reply.text =
+          "refused: hardware plugin '" + hardware_plugin_ + "' refused to re-activate: " + refusal;
       return reply;
     }
     spdlog::info("hardware {} re-activated", hardware_plugin_);

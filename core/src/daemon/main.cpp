@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
   app.add_flag("!--no-dds", options.dds, "do not start the DDS bridge");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swiveld")) return *exit;
 
-  // Block the stop and reload signals before any thread exists so that every thread inherits the mask
-  // and only run_until_signal() receives them (no work in a signal handler).
+  // Block the stop and reload signals before any thread exists so that every thread inherits the
+  // mask and only run_until_signal() receives them (no work in a signal handler).
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGTERM);
@@ -54,10 +54,11 @@ int main(int argc, char** argv) {
     swivel::daemon::Daemon daemon(std::move(config), options);
     const auto& c = daemon.config();
     if (check) {
-      std::printf("%s: configuration valid (robot %s, hardware %s, drivetrain %s, "
-                  "localization %s)\n",
-                  c.file.c_str(), c.robot.name.c_str(), c.hardware.plugin.c_str(),
-                  c.drivetrain.plugin.c_str(), c.localization.plugin.c_str());
+      std::printf(
+          "%s: configuration valid (robot %s, hardware %s, drivetrain %s, "
+          "localization %s)\n",
+          c.file.c_str(), c.robot.name.c_str(), c.hardware.plugin.c_str(),
+          c.drivetrain.plugin.c_str(), c.localization.plugin.c_str());
       return 0;
     }
     daemon.start();

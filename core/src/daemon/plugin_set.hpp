@@ -51,8 +51,8 @@ void configure_plugin(Interface& plugin, const PluginConfig& slot, const PluginC
     // which may be unloaded while the stack unwinds (its instance is destroyed on the way).
     throw ConfigError(e.what());
   } catch (const std::exception& e) {
-    throw PluginError(slot.where + " plugin '" + slot.plugin + "' failed to configure: " +
-                      e.what());
+    throw PluginError(slot.where + " plugin '" + slot.plugin +
+                      "' failed to configure: " + e.what());
   }
 }
 

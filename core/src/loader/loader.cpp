@@ -9,9 +9,8 @@
 #include <mutex>
 #include <string_view>
 
-#include "swivel/plugin_loader.hpp"
-
 #include "swivel/plugin/abi_fingerprint.hpp"
+#include "swivel/plugin_loader.hpp"
 
 #ifndef SWIVEL_PLUGIN_INSTALL_DIR
 #define SWIVEL_PLUGIN_INSTALL_DIR "/usr/local/lib/swivel/plugins"
@@ -115,14 +114,13 @@ std::shared_ptr<PluginLibrary> PluginLoader::open(std::uint32_t kind, const std:
     }
     return library;
   }
-  throw PluginError(kind_name + " plugin '" + name + "' not found: no " + file + " in " +
-                    (search_path_.empty() ? std::string("an empty search path")
-                                          : join(search_path_)) +
-                    " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
+  throw PluginError(
+      kind_name + " plugin '" + name + "' not found: no " + file + " in " +
+      (search_path_.empty() ? std::string("an empty search path") : join(search_path_)) +
+      " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
 }
 
-std::shared_ptr<PluginLibrary> PluginLoader::open_file(std::uint32_t kind,
-                                                       const std::string& file,
+std::shared_ptr<PluginLibrary> PluginLoader::open_file(std::uint32_t kind, const std::string& file,
                                                        const SwivelPluginDescriptor*& descriptor) {
   const std::string key = canonical(file);
   std::shared_ptr<PluginLibrary> library;
@@ -172,8 +170,7 @@ std::shared_ptr<PluginLibrary> PluginLoader::open_file(std::uint32_t kind,
   return library;
 }
 
-void* PluginLoader::instantiate(const SwivelPluginDescriptor& descriptor,
-                                const std::string& path) {
+void* PluginLoader::instantiate(const SwivelPluginDescriptor& descriptor, const std::string& path) {
   const char* error = nullptr;
   void* instance = descriptor.create(&error);
   if (instance == nullptr) {

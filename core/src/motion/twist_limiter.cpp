@@ -41,7 +41,8 @@ double AxisLimiter::step(double target, double dt_s) noexcept {
     // The acceleration from which ramping it down at j_max, one step at a time, ends exactly
     // at the target: a^2 / (2 j) + a dt / 2 of velocity change remains while it falls to zero.
     const double half_step = 0.5 * j_max * dt_s;
-    const double braking = std::sqrt(half_step * half_step + 2.0 * j_max * std::abs(error)) - half_step;
+    const double braking =
+        std::sqrt(half_step * half_step + 2.0 * j_max * std::abs(error)) - half_step;
     const double wanted = std::copysign(std::min(a_max, braking), error);
     a = acceleration_ + clamp_abs(wanted - acceleration_, j_max * dt_s);
     // Within one step of the target: arrive instead of oscillating about it.
@@ -63,7 +64,8 @@ AxisLimits TwistLimiter::linear_axis(const MotionLimits& limits) noexcept {
 
 AxisLimits TwistLimiter::angular_axis(const MotionLimits& limits) noexcept {
   return {limit_or_none(limits.angular_velocity_radps),
-          limit_or_none(limits.angular_acceleration_radps2), limit_or_none(limits.angular_jerk_radps3)};
+          limit_or_none(limits.angular_acceleration_radps2),
+          limit_or_none(limits.angular_jerk_radps3)};
 }
 
 TwistLimiter::TwistLimiter(const MotionLimits& limits) noexcept

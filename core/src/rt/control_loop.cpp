@@ -14,17 +14,13 @@
 namespace swivel::rt {
 namespace {
 
-bool finite(double v) noexcept {
-  return std::isfinite(v);
-}
+bool finite(double v) noexcept { return std::isfinite(v); }
 
 bool finite(const Twist2& t) noexcept {
   return finite(t.vx_mps) && finite(t.vy_mps) && finite(t.wz_radps);
 }
 
-bool finite(const Pose2& p) noexcept {
-  return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad);
-}
+bool finite(const Pose2& p) noexcept { return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad); }
 
 // The first non-finite field of a reading, as a static cause text; nullptr when all finite.
 const char* non_finite_field(const HardwareState& s) noexcept {
@@ -66,9 +62,7 @@ PoseEstimate publishable(PoseEstimate e) noexcept {
   return e;
 }
 
-bool finite(const MotionCaptureSample& m) noexcept {
-  return finite(m.stamp_s) && finite(m.pose);
-}
+bool finite(const MotionCaptureSample& m) noexcept { return finite(m.stamp_s) && finite(m.pose); }
 
 bool all_zero(const ActuatorCommand& c) noexcept {
   for (std::uint32_t i = 0; i < c.module_count && i < kMaxModules; ++i) {
@@ -190,9 +184,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
   snapshot_.write(state_);
 }
 
-ControlLoop::~ControlLoop() {
-  stop();
-}
+ControlLoop::~ControlLoop() { stop(); }
 
 std::vector<std::string> ControlLoop::start() {
   if (running_.load(std::memory_order_acquire)) {
@@ -409,18 +401,16 @@ void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail, 
 void ControlLoop::check_odometry(const OdometryIncrement& odometry, double now_s) noexcept {
   const bool gyro_valid = current_.gyro_valid;
   switch (odometry_monitor_.update(odometry, gyro_valid, current_.gyro_wz_radps)) {
-    case OdometryMonitor::Verdict::kConsistent:
-      return;
+    case OdometryMonitor::Verdict::kConsistent: return;
     case OdometryMonitor::Verdict::kGyroDisagrees:
       raise_fault(FaultCode::kOdometryInconsistent, now_s,
                   "encoder yaw rate disagrees with the gyro",
-                  odometry_monitor_.yaw_difference_radps(),
-                  odometry_monitor_.gyro_limit_radps());
+                  odometry_monitor_.yaw_difference_radps(), odometry_monitor_.gyro_limit_radps());
       return;
     case OdometryMonitor::Verdict::kResidualHigh:
       raise_fault(FaultCode::kOdometryInconsistent, now_s,
-                  "drivetrain odometry residual above its limit",
-                  odometry_monitor_.residual_mps(), odometry_monitor_.options().residual_limit_mps);
+                  "drivetrain odometry residual above its limit", odometry_monitor_.residual_mps(),
+                  odometry_monitor_.options().residual_limit_mps);
       return;
   }
 }
@@ -579,7 +569,8 @@ bool ControlLoop::step_calibration(double now_s, bool final_stop) noexcept {
   if (calibration == nullptr) return false;
   if (final_stop || cancel_calibration_.exchange(false, std::memory_order_acq_rel)) {
     retire_calibration(CalibrationOutcome::kCancelled, now_s);
-    if (!final_stop) raise_transient_fault(FaultCode::kCalibrationError, now_s, "calibration cancelled");
+    if (!final_stop)
+      raise_transient_fault(FaultCode::kCalibrationError, now_s, "calibration cancelled");
     return false;
   }
   if (latched_fault_ != FaultCode::kNone) {
@@ -605,9 +596,7 @@ bool ControlLoop::step_calibration(double now_s, bool final_stop) noexcept {
   return false;
 }
 
-void ControlLoop::run_cycle(double now_s) noexcept {
-  cycle(now_s, false);
-}
+void ControlLoop::run_cycle(double now_s) noexcept { cycle(now_s, false); }
 
 // True while the hardware must not be called (pause_hardware()). Grants a pause only to a
 // robot in safe stop whose last setpoints were zero; a requester that gave up meanwhile
@@ -652,8 +641,7 @@ void ControlLoop::take_request(double now_s, std::uint64_t& clear_id) noexcept {
   const char* thrown = nullptr;
   if (!finite(request.pose.pose)) {
     copy_text("non-finite pose", reply.detail);
-  } else if (guarded([&] { return localization.hand_over(request.pose); }, thrown) ==
-             Status::kOk) {
+  } else if (guarded([&] { return localization.hand_over(request.pose); }, thrown) == Status::kOk) {
     reply.ok = true;
   } else {
     copy_text(thrown != nullptr ? thrown : localization.last_error(), reply.detail);

@@ -15,9 +15,7 @@ namespace {
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
-std::string errno_text(int error) {
-  return std::strerror(error);
-}
+std::string errno_text(int error) { return std::strerror(error); }
 
 }  // namespace
 

@@ -102,9 +102,7 @@ std::string format_log_record(const LogRecord& r) {
 
 RtLog::RtLog(std::shared_ptr<spdlog::logger> logger) : logger_(std::move(logger)) {}
 
-RtLog::~RtLog() {
-  stop();
-}
+RtLog::~RtLog() { stop(); }
 
 void RtLog::start(double poll_period_s) {
   if (thread_.joinable()) return;

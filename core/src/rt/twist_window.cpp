@@ -13,9 +13,7 @@ namespace {
 
 using ConstArrayMap = Eigen::Map<const Eigen::ArrayXd>;
 
-bool valid_resolution(double v) {
-  return std::isfinite(v) && v >= 0.0;
-}
+bool valid_resolution(double v) { return std::isfinite(v) && v >= 0.0; }
 
 }  // namespace
 

@@ -76,9 +76,8 @@ bool Notifier::notify(std::string_view state) const noexcept {
   std::memcpy(address.sun_path, path_.data(), path_.size());
   // An abstract socket's name starts with a NUL byte and is not NUL-terminated.
   if (path_[0] == '@') address.sun_path[0] = '\0';
-  const auto length =
-      static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + path_.size() +
-                             (path_[0] == '@' ? 0 : 1));
+  const auto length = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + path_.size() +
+                                             (path_[0] == '@' ? 0 : 1));
   const ssize_t sent = ::sendto(fd_, state.data(), state.size(), MSG_NOSIGNAL,
                                 reinterpret_cast<const sockaddr*>(&address), length);
   return sent == static_cast<ssize_t>(state.size());

@@ -25,8 +25,8 @@ class Loaded {
   Loaded(const char* file, const char* params_yaml, const swivel::RobotModel& robot) {
     handle_ = dlopen(file, RTLD_NOW | RTLD_LOCAL);
     if (handle_ == nullptr) throw std::runtime_error(std::string("dlopen: ") + dlerror());
-    auto entry = reinterpret_cast<SwivelPluginEntryPoint>(
-        dlsym(handle_, SWIVEL_PLUGIN_ENTRY_POINT));
+    auto entry =
+        reinterpret_cast<SwivelPluginEntryPoint>(dlsym(handle_, SWIVEL_PLUGIN_ENTRY_POINT));
     if (entry == nullptr) throw std::runtime_error(std::string(file) + ": no entry point");
     descriptor_ = entry();
     const char* error = nullptr;

@@ -36,5 +36,4 @@ class ThrowsInUpdate final : public Localization {
 
 }  // namespace swivel::fault_plugins
 
-SWIVEL_EXPORT_PLUGIN(swivel::fault_plugins::ThrowsInUpdate, swivel::Localization,
-                     "throws_update")
+SWIVEL_EXPORT_PLUGIN(swivel::fault_plugins::ThrowsInUpdate, swivel::Localization, "throws_update")

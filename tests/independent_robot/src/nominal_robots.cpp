@@ -3,9 +3,7 @@
 
 namespace swivel::independent {
 
-DifferentialGeometry docent_nominal() {
-  return DifferentialGeometry{0.075, 0.075, 0.40};
-}
+DifferentialGeometry docent_nominal() { return DifferentialGeometry{0.075, 0.075, 0.40}; }
 
 std::array<SwpcModule, 4> swpc4_nominal() {
   constexpr double kX = 0.215;

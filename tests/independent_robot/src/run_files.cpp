@@ -68,7 +68,8 @@ std::string nominal_model_yaml(const RunSpec& spec) {
   const bool swpc = spec.robot == Robot::kSwpc4;
   std::string y;
   if (swpc) {
-    y += "# swpc4: four single-wheel powered casters, docs/methods.md §1 design values (nominal).\n";
+    y +=
+        "# swpc4: four single-wheel powered casters, docs/methods.md §1 design values (nominal).\n";
     y += "# Steering angles: measured = true - steering_offset_rad; contact trails the axis.\n";
     y += "name: swpc4\ndrivetrain: swpc\nswpc:\n  modules:\n";
     for (const SwpcModule& m : swpc4_nominal()) {
@@ -97,8 +98,8 @@ std::string nominal_model_yaml(const RunSpec& spec) {
   const bool accel = spec.model_limits == ModelLimits::kAll;
   // Passive, self-aligning casters have no steering motor whose rate a limit could state:
   // they swing as fast as the motion turns them.
-  const bool steering = swpc && spec.steering != Steering::kSelfAligning &&
-                        spec.model_limits != ModelLimits::kNone;
+  const bool steering =
+      swpc && spec.steering != Steering::kSelfAligning && spec.model_limits != ModelLimits::kNone;
   if (accel || steering) {
     y += "limits:\n";
     if (accel) {

@@ -44,13 +44,9 @@ void check_noise(const NoiseSpec& n) {
 
 }  // namespace
 
-std::string robot_name(Robot robot) {
-  return robot == Robot::kDocent ? "docent" : "swpc4";
-}
+std::string robot_name(Robot robot) { return robot == Robot::kDocent ? "docent" : "swpc4"; }
 
-std::size_t wheel_count(Robot robot) {
-  return robot == Robot::kDocent ? 2U : 4U;
-}
+std::size_t wheel_count(Robot robot) { return robot == Robot::kDocent ? 2U : 4U; }
 
 NoiseSpec NoiseSpec::quiet() {
   NoiseSpec n;

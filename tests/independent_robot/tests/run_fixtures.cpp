@@ -7,9 +7,7 @@
 
 namespace swivel::independent::test {
 
-double count_rad() {
-  return 2.0 * std::numbers::pi / 4096.0;
-}
+double count_rad() { return 2.0 * std::numbers::pi / 4096.0; }
 
 RunSpec quiet_run(Robot robot, double duration_s, std::vector<TourSegment> tour) {
   RunSpec spec;
@@ -51,8 +49,6 @@ double wheel_at(const RunRecord& record, std::size_t i, double t_s) {
   return a.wheel_rad[i] + f * (b.wheel_rad[i] - a.wheel_rad[i]);
 }
 
-double wrapped(double a) {
-  return std::remainder(a, 2.0 * std::numbers::pi);
-}
+double wrapped(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
 }  // namespace swivel::independent::test

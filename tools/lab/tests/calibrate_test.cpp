@@ -61,12 +61,11 @@ class LabCalibrateTest : public ::testing::Test {
     const std::string file =
         (dir_ / ("cal_" + std::to_string(m) + "_" + std::to_string(static_cast<int>(deg)) + ".csv"))
             .string();
-    const int status = lab("simulate --model " + model + " --true-model " +
-                           (dir_ / "truth.yaml").string() +
-                           " --trajectory calibration --noise none --locked-module " +
-                           std::to_string(m) + " --locked-steer-deg " + std::to_string(deg) +
-                           " --seed " + std::to_string(m) + " " + (extra.empty() ? "--duration 5.3" : extra) +
-                           " --out " + file);
+    const int status =
+        lab("simulate --model " + model + " --true-model " + (dir_ / "truth.yaml").string() +
+            " --trajectory calibration --noise none --locked-module " + std::to_string(m) +
+            " --locked-steer-deg " + std::to_string(deg) + " --seed " + std::to_string(m) + " " +
+            (extra.empty() ? "--duration 5.3" : extra) + " --out " + file);
     EXPECT_EQ(status, 0) << err_;
     return file;
   }
@@ -151,7 +150,8 @@ TEST_F(LabCalibrateTest, TooLittleRotationIsRefusedWithTheReason) {
   }
   const std::string out = (dir_ / "refused.yaml").string();
   EXPECT_EQ(lab("calibrate --model " + nominal_ + runs + " --out " + out), 2);
-  EXPECT_NE(err_.find("refused: enough_rotation: module 3 locked at 164.97 deg turned only 17"), std::string::npos)
+  EXPECT_NE(err_.find("refused: enough_rotation: module 3 locked at 164.97 deg turned only 17"),
+            std::string::npos)
       << err_;
   EXPECT_NE(out_.find("FAIL enough_rotation"), std::string::npos) << out_;
   EXPECT_FALSE(std::filesystem::exists(out));
@@ -160,8 +160,7 @@ TEST_F(LabCalibrateTest, TooLittleRotationIsRefusedWithTheReason) {
 TEST_F(LabCalibrateTest, MissingSecondLockIsRefused) {
   std::string runs;
   for (int m = 1; m <= 4; ++m) runs += " --run " + simulate(nominal_, m, 45.0, "");
-  EXPECT_EQ(lab("calibrate --model " + nominal_ + runs + " --out " +
-                (dir_ / "x.yaml").string()),
+  EXPECT_EQ(lab("calibrate --model " + nominal_ + runs + " --out " + (dir_ / "x.yaml").string()),
             2);
   EXPECT_NE(err_.find("module 1 has 1 locked runs, need exactly 2"), std::string::npos) << err_;
 }

@@ -3,14 +3,13 @@
 // tables, writes its files, and its numbers pass sanity checks that a broken pipeline fails.
 
 #include <gtest/gtest.h>
-
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -42,8 +41,8 @@ struct LabRun {
 class ReproduceDocentTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("swivel_reproduce_docent_test_" +
-                                         std::to_string(::getpid()));
+    root_ =
+        fs::temp_directory_path() / ("swivel_reproduce_docent_test_" + std::to_string(::getpid()));
     fs::create_directories(root_);
     first_ = new LabRun(reproduce("a", 7));
   }
@@ -194,7 +193,8 @@ TEST_F(ReproduceDocentTest, SameSeedGivesIdenticalResultsAndAnotherSeedDoesNot) 
   EXPECT_EQ(again.results.at("scenarios"), first_->results.at("scenarios"));
   const LabRun other = reproduce("c", 8);
   ASSERT_EQ(other.status, 0) << other.out;
-  EXPECT_NE(summary(other, 0, "eg", "mean_max_error_m"), summary(*first_, 0, "eg", "mean_max_error_m"));
+  EXPECT_NE(summary(other, 0, "eg", "mean_max_error_m"),
+            summary(*first_, 0, "eg", "mean_max_error_m"));
 }
 
 TEST_F(ReproduceDocentTest, FindsTheRepositoryModelFromAnyWorkingDirectory) {

@@ -79,7 +79,7 @@ TEST_F(LabSimulateTest, DifferentialLogDeadReckonsOntoItsMotionCapture) {
   }
   ASSERT_TRUE(log.samples.back().has_truth);
   EXPECT_NEAR(log.samples.back().truth.x_m, 2.8, 1e-3);  // two bursts of 3.5 s at 0.4 m/s
-  EXPECT_NEAR(x, log.samples.back().truth.x_m, 2e-4);  // about one encoder count of travel
+  EXPECT_NEAR(x, log.samples.back().truth.x_m, 2e-4);    // about one encoder count of travel
   EXPECT_NEAR(y, log.samples.back().truth.y_m, 1e-6);
 }
 
@@ -117,15 +117,15 @@ TEST_F(LabSimulateTest, SwpcCalibrationRunIsDeterministicPerSeed) {
 TEST_F(LabSimulateTest, ErrorsAreReportedWithNonZeroStatus) {
   EXPECT_EQ(simulate("--model " + robot("docent.yaml") + " --trajectory strafe", "x.csv"), 1);
   EXPECT_NE(error_.find("needs an omnidirectional (swpc) robot"), std::string::npos) << error_;
-  EXPECT_EQ(simulate("--model " + robot("swpc4.yaml") + " --effect wheel_radius.left_scale=1.1",
-                     "x.csv"),
-            1);
+  EXPECT_EQ(
+      simulate("--model " + robot("swpc4.yaml") + " --effect wheel_radius.left_scale=1.1", "x.csv"),
+      1);
   EXPECT_NE(error_.find("effects.wheel_radius.left_scale: unknown parameter"), std::string::npos)
       << error_;
-  EXPECT_EQ(simulate("--model " + robot("swpc4.yaml") +
-                         " --trajectory calibration --locked-module 5",
-                     "x.csv"),
-            1);
+  EXPECT_EQ(
+      simulate("--model " + robot("swpc4.yaml") + " --trajectory calibration --locked-module 5",
+               "x.csv"),
+      1);
   EXPECT_NE(error_.find("--locked-module: expected 1..4, got 5"), std::string::npos) << error_;
 }
 

@@ -9,7 +9,6 @@
 // 3 sigma) 90 %; outside effects never named; 1-sigma coverage 60-75 %; under 10 s a run.
 
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -52,17 +51,20 @@ const char* yes(bool b) { return b ? "yes" : "NO"; }
 
 int run_battery(const std::vector<BatteryCase>& cases) {
   std::vector<battery::CaseOutcome> outcomes;
-  std::printf("%-44s %-34s %-34s %-4s %-5s %6s\n", "case", "sensor to pose", "command to motion", "ok",
-              "3sig", "cpu");
+  std::printf("%-44s %-34s %-34s %-4s %-5s %6s\n", "case", "sensor to pose", "command to motion",
+              "ok", "3sig", "cpu");
   for (const BatteryCase& c : cases) {
     battery::CaseOutcome o = battery::run_case(c);
     std::printf("%-44s %-34s %-34s %-4s %-5s %5.1fs\n", o.id.c_str(), outcome_label(o, 0).c_str(),
-                outcome_label(o, 1).c_str(), yes(o.correct), o.kind == CaseKind::kSingle || o.kind == CaseKind::kPair ? yes(o.values_within_3_sigma) : "-",
+                outcome_label(o, 1).c_str(), yes(o.correct),
+                o.kind == CaseKind::kSingle || o.kind == CaseKind::kPair
+                    ? yes(o.values_within_3_sigma)
+                    : "-",
                 o.cpu_time_s);
     if (!o.correct) std::printf("    %s\n", o.problem.c_str());
     for (const auto& p : o.params) {
-      std::printf("    %s.%s: truth %.6g, fitted %.6g +- %.2g (%.1f sigma)\n", p.effect.c_str(), p.key.c_str(),
-                  p.truth, p.value, p.sigma, p.deviation());
+      std::printf("    %s.%s: truth %.6g, fitted %.6g +- %.2g (%.1f sigma)\n", p.effect.c_str(),
+                  p.key.c_str(), p.truth, p.value, p.sigma, p.deviation());
     }
     for (double z : o.effect_deviation_z) std::printf("    jointly %.1f sigma from the truth\n", z);
     std::fflush(stdout);
@@ -107,21 +109,32 @@ int run_battery(const std::vector<BatteryCase>& cases) {
   }
   const auto pct = [](int a, int b) { return b > 0 ? 100.0 * a / b : 0.0; };
   std::printf("\n%zu runs\n", outcomes.size());
-  std::printf("  clean runs with no significant gap (both questions): %d/%d = %.0f %%  (target 100 %%; false-alarm rate %.0f %%)\n",
-              clean_ok, clean, pct(clean_ok, clean), 100.0 - pct(clean_ok, clean));
-  std::printf("  in-library effects named right, values within 3 sigma: %d/%d = %.0f %%  (target >= 90 %%)\n",
-              library_ok, library, pct(library_ok, library));
-  std::printf("  outside effects never named as a library effect: %d/%d = %.0f %%  (target 100 %%)\n", outside_ok,
-              outside, pct(outside_ok, outside));
-  std::printf("  coverage of the reported sigmas over %d fitted parameters: %.0f %% within 1 sigma (target 60-75 %%), %.0f %% within 3 sigma (~99 %%)\n",
-              params, pct(within1, params), pct(within3, params));
-  std::printf("  time per run (CPU, one thread): mean %.2f s, worst %.2f s  (target < 10 s; worst wall time %.2f s)\n",
-              outcomes.empty() ? 0.0 : total_time / static_cast<double>(outcomes.size()), worst_time, worst_wall);
+  std::printf(
+      "  clean runs with no significant gap (both questions): %d/%d = %.0f %%  (target 100 %%; "
+      "false-alarm rate %.0f %%)\n",
+      clean_ok, clean, pct(clean_ok, clean), 100.0 - pct(clean_ok, clean));
+  std::printf(
+      "  in-library effects named right, values within 3 sigma: %d/%d = %.0f %%  (target >= 90 "
+      "%%)\n",
+      library_ok, library, pct(library_ok, library));
+  std::printf(
+      "  outside effects never named as a library effect: %d/%d = %.0f %%  (target 100 %%)\n",
+      outside_ok, outside, pct(outside_ok, outside));
+  std::printf(
+      "  coverage of the reported sigmas over %d fitted parameters: %.0f %% within 1 sigma (target "
+      "60-75 %%), %.0f %% within 3 sigma (~99 %%)\n",
+      params, pct(within1, params), pct(within3, params));
+  std::printf(
+      "  time per run (CPU, one thread): mean %.2f s, worst %.2f s  (target < 10 s; worst wall "
+      "time %.2f s)\n",
+      outcomes.empty() ? 0.0 : total_time / static_cast<double>(outcomes.size()), worst_time,
+      worst_wall);
   std::printf("\nGap shrink (final position error of each replay, before -> after, m):\n");
   for (const auto& o : outcomes) {
     if (o.kind != CaseKind::kSingle && o.kind != CaseKind::kPair) continue;
-    std::printf("  %-44s sensor %.4f -> %.4f   command %.4f -> %.4f\n", o.id.c_str(), o.position_before_m[0],
-                o.position_after_m[0], o.position_before_m[1], o.position_after_m[1]);
+    std::printf("  %-44s sensor %.4f -> %.4f   command %.4f -> %.4f\n", o.id.c_str(),
+                o.position_before_m[0], o.position_after_m[0], o.position_before_m[1],
+                o.position_after_m[1]);
   }
   return 0;
 }
@@ -144,7 +157,10 @@ int main(int argc, char** argv) {
     for (const auto& id : ids) {
       const BatteryCase* c = swivel::independent::find_case(id);
       if (c == nullptr) {
-        std::fprintf(stderr, "swivel-bench-model-gap: no battery case '%s' (swivel-independent-run --list)\n", id.c_str());
+        std::fprintf(
+            stderr,
+            "swivel-bench-model-gap: no battery case '%s' (swivel-independent-run --list)\n",
+            id.c_str());
         return swivel::cli::kUsageError;
       }
       cases.push_back(*c);
@@ -159,8 +175,9 @@ int main(int argc, char** argv) {
       const BatteryCase* c = swivel::independent::find_case(id);
       if (c == nullptr) return 1;
       const battery::CaseOutcome o = battery::run_case(*c);
-      std::printf("%-30s 120 s at 100 Hz: workflow %.2f s wall, %.2f s CPU; %s / %s\n", id, o.wall_time_s,
-                  o.cpu_time_s, outcome_label(o, 0).c_str(), outcome_label(o, 1).c_str());
+      std::printf("%-30s 120 s at 100 Hz: workflow %.2f s wall, %.2f s CPU; %s / %s\n", id,
+                  o.wall_time_s, o.cpu_time_s, outcome_label(o, 0).c_str(),
+                  outcome_label(o, 1).c_str());
     }
     return 0;
   }

@@ -63,7 +63,8 @@ constexpr double kBranchNudgeRadps = 0.5;
 // |v_s| < 2 d |w| it has no steady state near and turns with the body (|w| counted instead).
 // The sum over a window must stay below kMaxSwingGrowth.
 std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& run,
-                                     const std::vector<Window>& windows, const std::vector<Pose2>& path) {
+                                     const std::vector<Window>& windows,
+                                     const std::vector<Pose2>& path) {
   std::vector<char> out(windows.size(), 1);
   if (run.drivetrain != DrivetrainKind::kSwpc) return out;
   const std::size_t n = run.size();
@@ -79,8 +80,10 @@ std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& r
       const double vy = twist.vy_mps + twist.wz_radps * m.x_m;
       const double phi = run.steer_rad[i][k - 1] + m.steering_offset_rad;
       const double lambda = -(std::cos(phi) * vx + std::sin(phi) * vy) / m.caster_offset_m;
-      const bool near_centre = std::hypot(vx, vy) < 2.0 * m.caster_offset_m * std::abs(twist.wz_radps);
-      const double rate = std::max(std::max(0.0, lambda), near_centre ? std::abs(twist.wz_radps) : 0.0);
+      const bool near_centre =
+          std::hypot(vx, vy) < 2.0 * m.caster_offset_m * std::abs(twist.wz_radps);
+      const double rate =
+          std::max(std::max(0.0, lambda), near_centre ? std::abs(twist.wz_radps) : 0.0);
       growth[k] = std::max(growth[k], rate * dt);
     }
   }
@@ -104,7 +107,8 @@ std::vector<char> swing_free_windows(const RobotModel& nominal, const RunData& r
 // towards the log's side and swings the way the robot did; afterwards both are compared in
 // the same branch. The swing itself is in windows that are not compared.
 void follow_logged_branch(const sim::PlantParams& plant, const Twist2& twist, const RunData& run,
-                          std::size_t row, const HardwareState& measured, ActuatorCommand& command) {
+                          std::size_t row, const HardwareState& measured,
+                          ActuatorCommand& command) {
   const double limit = plant.limits.steering_rate_radps.value_or(0.0);
   for (std::size_t i = 0; i < run.steer_rad.size(); ++i) {
     const SwpcModuleParams& m = plant.modules[i];
@@ -182,7 +186,6 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
     track.pose[k] = Pose2{p.x_m, p.y_m, previous + wrap_pi(p.yaw_rad - previous)};
     for (std::size_t i = 0; i < modules_; ++i) {
       track.wheel[i][k] = hw.wheel_angle_rad[i];
-
     }
   };
   record(0);
@@ -207,7 +210,8 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
       // The controller steers from the angles its encoders show (late by any sensor
       // latency), at its own rate.
       if (swpc_) {
-        for (std::size_t i = 0; i < modules_; ++i) measured.steer_angle_rad[i] = world.steer_reading_rad(i);
+        for (std::size_t i = 0; i < modules_; ++i)
+          measured.steer_angle_rad[i] = world.steer_reading_rad(i);
       }
       const Twist2 limited = limiter.step(cmd, h);
       controller.velocity(limited, measured, command);
@@ -241,7 +245,8 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
     const std::size_t b = windows[j].b;
     std::size_t c = 0;
     for (std::size_t i = 0; i < modules_; ++i, ++c) {
-      out[c * w + j] = (run.wheel_rad[i][b] - run.wheel_rad[i][a]) - (track_.wheel[i][b] - track_.wheel[i][a]);
+      out[c * w + j] =
+          (run.wheel_rad[i][b] - run.wheel_rad[i][a]) - (track_.wheel[i][b] - track_.wheel[i][a]);
     }
     if (swpc_) {
       // The sum of the rows' differences (wrapped: a caster that turned through a reversal
@@ -261,7 +266,8 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
   return true;
 }
 
-std::vector<double> CommandReplay::timing_variance(const RobotModel& model, double command_delay_s) const {
+std::vector<double> CommandReplay::timing_variance(const RobotModel& model,
+                                                   double command_delay_s) const {
   std::vector<double> early;
   std::vector<double> late;
   std::vector<double> out(channels_.size() * windows_->size(), 0.0);
@@ -276,7 +282,8 @@ std::vector<double> CommandReplay::timing_variance(const RobotModel& model, doub
   return out;
 }
 
-void CommandReplay::path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const {
+void CommandReplay::path(const RobotModel& model, double command_delay_s,
+                         std::vector<Pose2>& out) const {
   out.assign(run_->size(), Pose2{kNaN, kNaN, kNaN});
   Track track;
   if (!simulate(model, command_delay_s, run_->size(), true, track)) return;

@@ -150,8 +150,8 @@ double chi_square_z(double chi2, double dof) {
   return z;
 }
 
-double mahalanobis_squared(const std::vector<double>& difference, const std::vector<double>& covariance,
-                           std::size_t& rank) {
+double mahalanobis_squared(const std::vector<double>& difference,
+                           const std::vector<double>& covariance, std::size_t& rank) {
   const auto p = static_cast<Eigen::Index>(difference.size());
   rank = 0;
   if (p == 0) return 0.0;
@@ -236,7 +236,8 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   for (std::size_t g : row_group) groups = std::max(groups, g + 1);
   // Per group: its rows by window (npos where it has none).
   constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  std::vector<std::vector<std::size_t>> rows_of(groups, std::vector<std::size_t>(window_count, kNone));
+  std::vector<std::vector<std::size_t>> rows_of(groups,
+                                                std::vector<std::size_t>(window_count, kNone));
   std::vector<char> used(window_count, 0);
   for (std::size_t i = 0; i < r.size(); ++i) {
     if (!std::isfinite(r[i])) continue;
@@ -330,8 +331,10 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   solver_problem.AddResidualBlock(cost, nullptr, z.data());
   for (std::size_t j = 0; j < p; ++j) {
     const int jj = static_cast<int>(j);
-    if (specs[j].lower > -1e299) solver_problem.SetParameterLowerBound(z.data(), jj, specs[j].lower / specs[j].scale);
-    if (specs[j].upper < 1e299) solver_problem.SetParameterUpperBound(z.data(), jj, specs[j].upper / specs[j].scale);
+    if (specs[j].lower > -1e299)
+      solver_problem.SetParameterLowerBound(z.data(), jj, specs[j].lower / specs[j].scale);
+    if (specs[j].upper < 1e299)
+      solver_problem.SetParameterUpperBound(z.data(), jj, specs[j].upper / specs[j].scale);
   }
 
   ceres::Solver::Options solver_options;
@@ -351,8 +354,10 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   std::vector<double> dense(have_jacobian ? static_cast<std::size_t>(jac.num_rows) * p : 0U, 0.0);
   if (have_jacobian) {
     for (int r = 0; r < jac.num_rows; ++r) {
-      for (int k = jac.rows[static_cast<std::size_t>(r)]; k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
-        dense[static_cast<std::size_t>(r) * p + static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
+      for (int k = jac.rows[static_cast<std::size_t>(r)];
+           k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
+        dense[static_cast<std::size_t>(r) * p +
+              static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
             jac.values[static_cast<std::size_t>(k)];
       }
     }
@@ -360,7 +365,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
     const auto pp = static_cast<Eigen::Index>(p);
     Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
     for (int r = 0; r < jac.num_rows; ++r) {
-      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p, pp);
+      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p,
+                                                  pp);
       information.noalias() += row * row.transpose();
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(information);
@@ -378,8 +384,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
     }
     if (removed.norm() > 0.0) {
       for (std::size_t j = 0; j < p; ++j) {
-        z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)), specs[j].lower / specs[j].scale,
-                          specs[j].upper / specs[j].scale);
+        z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)),
+                          specs[j].lower / specs[j].scale, specs[j].upper / specs[j].scale);
       }
     }
   }
@@ -390,8 +396,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   if (!out.ok || !have_jacobian) return out;
   std::vector<std::size_t> groups = problem.row_group;
   if (groups.empty()) groups.assign(problem.row_count, 0);
-  const std::vector<double> cov_z = sandwich_covariance(dense, p, out.residuals, problem.row_window,
-                                                        groups, problem.window_count, out.observable);
+  const std::vector<double> cov_z = sandwich_covariance(
+      dense, p, out.residuals, problem.row_window, groups, problem.window_count, out.observable);
   // The same, as if the rows were independent.
   {
     const auto pp = static_cast<Eigen::Index>(p);
@@ -418,7 +424,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
       const auto aa = static_cast<Eigen::Index>(a);
       out.naive_sigmas[a] = std::sqrt(std::max(naive(aa, aa), 0.0)) * specs[a].scale;
       for (std::size_t b = 0; b < p; ++b) {
-        out.naive_covariance[a * p + b] = naive(aa, static_cast<Eigen::Index>(b)) * specs[a].scale * specs[b].scale;
+        out.naive_covariance[a * p + b] =
+            naive(aa, static_cast<Eigen::Index>(b)) * specs[a].scale * specs[b].scale;
       }
     }
   }

@@ -23,23 +23,24 @@ constexpr double kLatencyResolution = 0.005;
 // Typical magnitude of each effect parameter: the fit works in units of it, and it sets the
 // finite-difference step.
 double typical_magnitude(const std::string& effect) {
-  if (effect == "gyro_bias") return 0.005;        // rad/s
-  if (effect == "steering_offset") return 0.02;   // rad
-  if (effect == "slip") return 0.002;             // per rad/s^2
+  if (effect == "gyro_bias") return 0.005;                                // rad/s
+  if (effect == "steering_offset") return 0.02;                           // rad
+  if (effect == "slip") return 0.002;                                     // per rad/s^2
   if (effect == "actuator_lag" || effect == "steering_lag") return 0.05;  // s
-  if (effect == "sensor_latency") return 0.02;    // s
-  if (effect == "caster_offset") return 0.1;      // factor
+  if (effect == "sensor_latency") return 0.02;                            // s
+  if (effect == "caster_offset") return 0.1;                              // factor
   return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width
 }
 
-const char* const kSensorEffects[] = {"gyro_bias",      "gyro_scale",      "wheel_radius",
-                                      "track_width",    "caster_offset",   "steering_offset",
+const char* const kSensorEffects[] = {"gyro_bias",      "gyro_scale",    "wheel_radius",
+                                      "track_width",    "caster_offset", "steering_offset",
                                       "sensor_latency", "slip"};
 const char* const kCommandEffects[] = {"actuator_lag", "steering_lag"};
 
 bool in_question(const std::string& effect, Question q) {
   const auto is = [&effect](const char* e) { return effect == e; };
-  if (q == Question::kSensorToPose) return std::any_of(std::begin(kSensorEffects), std::end(kSensorEffects), is);
+  if (q == Question::kSensorToPose)
+    return std::any_of(std::begin(kSensorEffects), std::end(kSensorEffects), is);
   return std::any_of(std::begin(kCommandEffects), std::end(kCommandEffects), is);
 }
 

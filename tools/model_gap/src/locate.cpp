@@ -31,14 +31,10 @@ std::vector<double> smoothed_derivative(const std::vector<double>& t, const std:
 
 const char* phase_name(PhaseKind kind) {
   switch (kind) {
-    case PhaseKind::kStanding:
-      return "standing";
-    case PhaseKind::kStraight:
-      return "straight";
-    case PhaseKind::kTurning:
-      return "turning";
-    case PhaseKind::kAccelerating:
-      return "accelerating";
+    case PhaseKind::kStanding: return "standing";
+    case PhaseKind::kStraight: return "straight";
+    case PhaseKind::kTurning: return "turning";
+    case PhaseKind::kAccelerating: return "accelerating";
   }
   return "unknown";
 }
@@ -53,10 +49,9 @@ std::vector<PhaseKind> classify_phases(const CommandSeries& cmd, const PhaseThre
   std::vector<PhaseKind> out(n, PhaseKind::kStanding);
   for (std::size_t k = 0; k < n; ++k) {
     const double accel = std::hypot(dvx[k], dvy[k]);
-    const bool accelerating =
-        accel >= th.accel_mps2 || std::abs(dw[k]) >= th.angular_accel_radps2;
-    const bool standing = speed[k] < th.standing_speed_mps &&
-                          std::abs(cmd.wz_radps[k]) < th.standing_rate_radps;
+    const bool accelerating = accel >= th.accel_mps2 || std::abs(dw[k]) >= th.angular_accel_radps2;
+    const bool standing =
+        speed[k] < th.standing_speed_mps && std::abs(cmd.wz_radps[k]) < th.standing_rate_radps;
     if (accelerating) {
       out[k] = PhaseKind::kAccelerating;
     } else if (standing) {

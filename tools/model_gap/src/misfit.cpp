@@ -22,7 +22,7 @@ constexpr double kLoneJumpZ = 20.0;
 struct Regression {
   double z = 0.0;
   double share = 0.0;
-  double size = 0.0;  // RMS of the fitted part over the RMS of what is left around it
+  double size = 0.0;      // RMS of the fitted part over the RMS of what is left around it
   std::vector<double> t;  ///< per coefficient: estimate over its standard deviation
 };
 
@@ -70,7 +70,8 @@ Regression regress(const std::vector<double>& y, const std::vector<double>& x, s
     for (std::size_t k = 0; k < p; ++k) jac[i * p + k] = -x[i * p + k];
   }
   std::vector<char> observable;
-  const std::vector<double> cov = sandwich_covariance(jac, p, r, window, group, windows, observable);
+  const std::vector<double> cov =
+      sandwich_covariance(jac, p, r, window, group, windows, observable);
   std::vector<double> b(p);
   for (std::size_t k = 0; k < p; ++k) b[k] = beta(static_cast<Eigen::Index>(k));
   std::size_t rank = 0;
@@ -140,7 +141,8 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
       std::vector<double> z;
       for (double v : finite) z.push_back(std::abs(v) / spread);
       std::sort(z.begin(), z.end(), std::greater<>());
-      const auto count = static_cast<std::size_t>(std::count_if(z.begin(), z.end(), [](double v) { return v > kJumpZ; }));
+      const auto count = static_cast<std::size_t>(
+          std::count_if(z.begin(), z.end(), [](double v) { return v > kJumpZ; }));
       // The second largest decides (or the largest alone, against the higher bar); reported on
       // the scale of the other tests: 5 at the bar.
       const double second = z.size() > 1 ? z[1] : 0.0;
@@ -192,7 +194,8 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
   // World drift: the displacement residual turned into the world frame has a constant part.
   std::size_t cx = in.channels.size();
   for (std::size_t c = 0; c + 1 < in.channels.size(); ++c) {
-    if (in.channels[c].kind == ChannelKind::kPosition && in.channels[c + 1].kind == ChannelKind::kPosition) {
+    if (in.channels[c].kind == ChannelKind::kPosition &&
+        in.channels[c + 1].kind == ChannelKind::kPosition) {
       cx = c;
       break;
     }
@@ -220,10 +223,11 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
       rows_axis[2 * j + 1] = 1;
     }
     const Regression drift = regress(y, x, 2, rows_window, rows_axis, w);
-    out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction", drift.z,
-                   drift.share, drift.size, 0});
+    out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction",
+                   drift.z, drift.share, drift.size, 0});
   }
-  std::sort(out.begin(), out.end(), [](const MisfitTest& a, const MisfitTest& b) { return a.z > b.z; });
+  std::sort(out.begin(), out.end(),
+            [](const MisfitTest& a, const MisfitTest& b) { return a.z > b.z; });
   return out;
 }
 

@@ -12,7 +12,8 @@ double NoiseModel::sigma(std::size_t c, double x, double known) const {
 
 NoiseModel estimate_noise(const std::vector<double>& residuals, std::size_t windows,
                           const std::vector<std::vector<double>>& x,
-                          const std::vector<double>& floor_variance, const std::vector<double>& known) {
+                          const std::vector<double>& floor_variance,
+                          const std::vector<double>& known) {
   const auto known_at = [&known](std::size_t k) { return known.empty() ? 0.0 : known[k]; };
   const std::size_t channels = x.size();
   NoiseModel m;

@@ -38,7 +38,8 @@ class Evaluator {
   void set_nuisance(std::vector<double> values) { nuisance_ = std::move(values); }
   [[nodiscard]] const std::vector<double>& nuisance() const { return nuisance_; }
 
-  [[nodiscard]] FitProblem problem(const std::vector<const Candidate*>& effects, bool fit_nuisance) const {
+  [[nodiscard]] FitProblem problem(const std::vector<const Candidate*>& effects,
+                                   bool fit_nuisance) const {
     FitProblem p;
     const std::size_t w = replay_.windows;
     p.row_count = replay_.channels.size() * w;
@@ -49,7 +50,8 @@ class Evaluator {
       p.row_window[i] = i % w;
       p.row_group[i] = i / w;
     }
-    p.residuals = [this, effects, fit_nuisance](std::span<const double> theta, std::vector<double>& r) {
+    p.residuals = [this, effects, fit_nuisance](std::span<const double> theta,
+                                                std::vector<double>& r) {
       return evaluate(effects, theta, fit_nuisance, r, true);
     };
     return p;
@@ -64,7 +66,8 @@ class Evaluator {
       e->apply(model_, theta.subspan(i, e->params.size()));
       i += e->params.size();
     }
-    const std::span<const double> nuisance = fit_nuisance ? theta.subspan(i) : std::span<const double>(nuisance_);
+    const std::span<const double> nuisance =
+        fit_nuisance ? theta.subspan(i) : std::span<const double>(nuisance_);
     if (!replay_.residuals(model_, nuisance, raw_, limit_)) return false;
     r.resize(raw_.size());
     for (std::size_t k = 0; k < raw_.size(); ++k) r[k] = whiten ? raw_[k] / sigma_[k] : raw_[k];
@@ -106,7 +109,8 @@ struct Fitted {
 // whitened residuals' change it brings (noise sigmas). A correlated run can make a change of
 // a tenth of the noise statistically significant; it is still not worth a name.
 double contribution(const FitOutcome& with, const FitOutcome& without, std::size_t windows) {
-  if (!with.ok || !without.ok || with.residuals.size() != without.residuals.size() || windows == 0) return 0.0;
+  if (!with.ok || !without.ok || with.residuals.size() != without.residuals.size() || windows == 0)
+    return 0.0;
   const std::size_t channels = with.residuals.size() / windows;
   double largest = 0.0;
   for (std::size_t c = 0; c < channels; ++c) {
@@ -152,7 +156,8 @@ std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
 // precisely fitted yet changes nothing, and must not count as significant.
 double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
                const std::vector<double>& identity) {
-  if (!with.ok || with.n <= with.values.size() || with.covariance.empty() || with.naive_covariance.empty()) {
+  if (!with.ok || with.n <= with.values.size() || with.covariance.empty() ||
+      with.naive_covariance.empty()) {
     return 0.0;
   }
   const std::size_t p = with.values.size();
@@ -236,12 +241,9 @@ double rms(const std::vector<double>& v, std::size_t first, std::size_t count) {
 
 const char* verdict_name(Verdict v) {
   switch (v) {
-    case Verdict::kNoSignificantGap:
-      return "no significant gap";
-    case Verdict::kNamed:
-      return "named";
-    case Verdict::kUnexplained:
-      return "unexplained residual";
+    case Verdict::kNoSignificantGap: return "no significant gap";
+    case Verdict::kNamed: return "named";
+    case Verdict::kUnexplained: return "unexplained residual";
   }
   return "unknown";
 }
@@ -261,7 +263,8 @@ std::size_t param_count(const std::vector<const Candidate*>& effects) {
 }
 
 MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<double>& residuals,
-                           const std::vector<double>& sigma, const std::vector<double>& residuals_before) {
+                           const std::vector<double>& sigma,
+                           const std::vector<double>& residuals_before) {
   MisfitInputs m;
   m.channels = replay.channels;
   m.windows = replay.windows;
@@ -270,7 +273,8 @@ MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<doubl
   // The regressor is the base model's predicted change: the measured one carries the
   // motion capture's noise, which the residual shares, and would correlate with it by itself.
   m.own_change.resize(residuals.size());
-  for (std::size_t k = 0; k < residuals.size(); ++k) m.own_change[k] = replay.own_change[k] - residuals_before[k];
+  for (std::size_t k = 0; k < residuals.size(); ++k)
+    m.own_change[k] = replay.own_change[k] - residuals_before[k];
   m.accel = replay.accel;
   m.start_yaw_rad = replay.start_yaw_rad;
   m.wheel_sin_change = replay.wheel_sin_change;
@@ -286,7 +290,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   QuestionReplay replay = given;
   std::vector<double> nuisance_initial;
   for (const ParamSpec& p : replay.nuisance) nuisance_initial.push_back(p.initial);
-  if (replay.known_variance_of) replay.known_variance = replay.known_variance_of(base, nuisance_initial);
+  if (replay.known_variance_of)
+    replay.known_variance = replay.known_variance_of(base, nuisance_initial);
   const auto wall_start = std::chrono::steady_clock::now();
   QuestionResult result;
   result.question = question;
@@ -301,7 +306,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     throw std::runtime_error(std::string("the nominal model cannot replay the run (") +
                              question_title(question) + ")");
   }
-  NoiseModel noise = estimate_noise(result.residuals_before, w, replay.noise_x, replay.noise_floor, replay.known_variance);
+  NoiseModel noise = estimate_noise(result.residuals_before, w, replay.noise_x, replay.noise_floor,
+                                    replay.known_variance);
   eval.set_sigma(row_sigma(noise, replay));
 
   // 2. The nominal model with its nuisance fitted; candidates keep the nuisance there until
@@ -310,20 +316,22 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     Fitted f;
     f.fit = replay.nuisance.empty()
                 ? score(eval.problem({}, false), {})
-                : fit(eval.problem({}, true), specs_of({}, {}, replay.nuisance, eval.nuisance()), options.fit);
+                : fit(eval.problem({}, true), specs_of({}, {}, replay.nuisance, eval.nuisance()),
+                      options.fit);
     return f;
   };
   Fitted nominal = fit_nominal();
   if (!nominal.fit.ok) throw std::runtime_error("the nominal model cannot be scored");
   eval.set_nuisance(nominal.fit.values);
-  const auto run_fit = [&](std::vector<const Candidate*> effects, const std::vector<double>& initial) {
+  const auto run_fit = [&](std::vector<const Candidate*> effects,
+                           const std::vector<double>& initial) {
     Fitted f;
     f.effects = std::move(effects);
     f.fit = fit(eval.problem(f.effects, false), specs_of(f.effects, initial, {}, {}), options.fit);
     return f;
   };
-  const auto single_fit = [&](const Candidate& c, const std::vector<double>& initial, double rss_nominal,
-                              const FitOutcome& nominal_fit) {
+  const auto single_fit = [&](const Candidate& c, const std::vector<double>& initial,
+                              double rss_nominal, const FitOutcome& nominal_fit) {
     Fitted f = run_fit({&c}, initial);
     f.z = {added_z(f.fit, 0, c.params.size(), rss_nominal, c.identity)};
     f.size = {contribution(f.fit, nominal_fit, w)};
@@ -335,15 +343,17 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
 
   // 3. Every candidate alone. A long run is screened: every candidate is fitted on its first
   //    stretch, and the most promising ones again on the whole run.
-  const std::size_t screen = std::max<std::size_t>(options.screen_min_windows,
-                                                   static_cast<std::size_t>(options.screen_fraction * static_cast<double>(w)));
+  const std::size_t screen = std::max<std::size_t>(
+      options.screen_min_windows,
+      static_cast<std::size_t>(options.screen_fraction * static_cast<double>(w)));
   const bool screening = screen * 10 < w * 7;
   std::vector<Fitted> singles;
   std::vector<char> full(library.size(), 1);
   if (screening) {
     eval.set_window_limit(screen);
     const FitOutcome nominal_screen = score(eval.problem({}, false), {});
-    for (const Candidate& c : library) singles.push_back(single_fit(c, {}, nominal_screen.rss, nominal_screen));
+    for (const Candidate& c : library)
+      singles.push_back(single_fit(c, {}, nominal_screen.rss, nominal_screen));
     eval.set_window_limit(static_cast<std::size_t>(-1));
     std::vector<std::size_t> order(singles.size());
     std::iota(order.begin(), order.end(), 0U);
@@ -360,7 +370,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
       full[i] = 1;
     }
   } else {
-    for (const Candidate& c : library) singles.push_back(single_fit(c, {}, nominal_fixed.rss, nominal_fixed));
+    for (const Candidate& c : library)
+      singles.push_back(single_fit(c, {}, nominal_fixed.rss, nominal_fixed));
   }
   // An effect is named when significant, large enough to matter, and further from the
   // model's own values than the replay can resolve (a lag, a limit).
@@ -374,7 +385,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
       const double value = f.fit.values[first + i];
       const double resolution = c.fit_resolution(i, value);
       if (resolution <= 0.0) continue;
-      const double sigma = std::hypot(std::isfinite(f.fit.sigmas[first + i]) ? f.fit.sigmas[first + i] : 0.0, resolution);
+      const double sigma = std::hypot(
+          std::isfinite(f.fit.sigmas[first + i]) ? f.fit.sigmas[first + i] : 0.0, resolution);
       chi2 += std::pow((value - c.identity[i]) / sigma, 2);
       count += 1.0;
     }
@@ -383,7 +395,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   const auto significant = [&](const Fitted& f) {
     if (!f.fit.ok) return false;
     for (std::size_t e = 0; e < f.z.size(); ++e) {
-      if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size || !resolved(f, e)) return false;
+      if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size || !resolved(f, e))
+        return false;
     }
     return true;
   };
@@ -407,20 +420,26 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   std::vector<Fitted> pairs;
   if (chosen != nullptr && options.max_effects >= 2) {
     if (!replay.nuisance.empty()) {
-      const FitOutcome joint = fit(eval.problem(chosen->effects, true),
-                                   specs_of(chosen->effects, chosen->fit.values, replay.nuisance, eval.nuisance()),
-                                   options.fit);
+      const FitOutcome joint =
+          fit(eval.problem(chosen->effects, true),
+              specs_of(chosen->effects, chosen->fit.values, replay.nuisance, eval.nuisance()),
+              options.fit);
       if (joint.ok) {
         const std::size_t p = param_count(chosen->effects);
-        eval.set_nuisance(std::vector<double>(joint.values.begin() + static_cast<std::ptrdiff_t>(p), joint.values.end()));
+        eval.set_nuisance(std::vector<double>(joint.values.begin() + static_cast<std::ptrdiff_t>(p),
+                                              joint.values.end()));
         Fitted& c = singles[static_cast<std::size_t>(chosen - singles.data())];
-        c.fit = score(eval.problem(c.effects, false), std::vector<double>(joint.values.begin(), joint.values.begin() + static_cast<std::ptrdiff_t>(p)));
-        c.fit.sigmas = std::vector<double>(joint.sigmas.begin(), joint.sigmas.begin() + static_cast<std::ptrdiff_t>(p));
+        c.fit = score(eval.problem(c.effects, false),
+                      std::vector<double>(joint.values.begin(),
+                                          joint.values.begin() + static_cast<std::ptrdiff_t>(p)));
+        c.fit.sigmas = std::vector<double>(joint.sigmas.begin(),
+                                           joint.sigmas.begin() + static_cast<std::ptrdiff_t>(p));
       }
     }
     std::vector<double> raw;
     eval.evaluate(chosen->effects, chosen->fit.values, false, raw, false);
-    const std::vector<MisfitTest> left = misfit_tests(misfit_inputs(replay, raw, eval.sigma(), result.residuals_before));
+    const std::vector<MisfitTest> left =
+        misfit_tests(misfit_inputs(replay, raw, eval.sigma(), result.residuals_before));
     const bool pattern_left = std::any_of(left.begin(), left.end(), [&](const MisfitTest& m) {
       return m.test != "jumps" && m.z >= options.min_z_name && m.size >= options.min_effect_size;
     });
@@ -439,7 +458,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
         if (k == chosen_index || !singles[k].fit.ok) continue;
         ++tried;
         if (!full[k]) {
-          singles[k] = single_fit(library[k], singles[k].fit.values, nominal_fixed.rss, nominal_fixed);
+          singles[k] =
+              single_fit(library[k], singles[k].fit.values, nominal_fixed.rss, nominal_fixed);
           full[k] = 1;
         }
         const Fitted& other = singles[k];
@@ -472,19 +492,22 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   Fitted final;
   {
     std::vector<double> raw;
-    const std::vector<double> chosen_values = chosen != nullptr ? chosen->fit.values : std::vector<double>{};
+    const std::vector<double> chosen_values =
+        chosen != nullptr ? chosen->fit.values : std::vector<double>{};
     if (replay.known_variance_of && chosen != nullptr) {
-      replay.known_variance = replay.known_variance_of(eval.model_with(selected, chosen_values), eval.nuisance());
+      replay.known_variance =
+          replay.known_variance_of(eval.model_with(selected, chosen_values), eval.nuisance());
     }
     if (eval.evaluate(selected, chosen_values, false, raw, false)) {
       noise = estimate_noise(raw, w, replay.noise_x, replay.noise_floor, replay.known_variance);
       eval.set_sigma(row_sigma(noise, replay));
     }
-    const std::vector<double> initial = chosen != nullptr ? chosen->fit.values : std::vector<double>{};
+    const std::vector<double> initial =
+        chosen != nullptr ? chosen->fit.values : std::vector<double>{};
     final.effects = selected;
     if (!selected.empty() || !replay.nuisance.empty()) {
-      final.fit = fit(eval.problem(selected, true), specs_of(selected, initial, replay.nuisance, eval.nuisance()),
-                      options.fit);
+      final.fit = fit(eval.problem(selected, true),
+                      specs_of(selected, initial, replay.nuisance, eval.nuisance()), options.fit);
     } else {
       final.fit = score(eval.problem({}, false), {});
     }
@@ -498,18 +521,23 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
 
   for (std::size_t i = 0; i < singles.size(); ++i) {
     result.candidates.push_back(score_of(singles[i]));
-    if (!full[i]) result.candidates.back().label_note = "screened on the first " + std::to_string(screen) + " windows";
+    if (!full[i])
+      result.candidates.back().label_note =
+          "screened on the first " + std::to_string(screen) + " windows";
   }
   for (const Fitted& f : pairs) result.candidates.push_back(score_of(f));
   // Best first: by BIC against the nominal model on the same stretch.
-  std::sort(result.candidates.begin(), result.candidates.end(),
-            [](const CandidateScore& a, const CandidateScore& b) { return a.delta_bic < b.delta_bic; });
+  std::sort(
+      result.candidates.begin(), result.candidates.end(),
+      [](const CandidateScore& a, const CandidateScore& b) { return a.delta_bic < b.delta_bic; });
 
   // 6. What remains, and the tests for what the library does not hold.
   const std::size_t effect_params = param_count(selected);
-  result.nuisance.assign(final.fit.values.begin() + static_cast<std::ptrdiff_t>(effect_params), final.fit.values.end());
+  result.nuisance.assign(final.fit.values.begin() + static_cast<std::ptrdiff_t>(effect_params),
+                         final.fit.values.end());
   eval.evaluate(selected, final.fit.values, true, result.residuals_after, false);
-  result.misfits = misfit_tests(misfit_inputs(replay, result.residuals_after, eval.sigma(), result.residuals_before));
+  result.misfits = misfit_tests(
+      misfit_inputs(replay, result.residuals_after, eval.sigma(), result.residuals_before));
   const auto counts = [&](const MisfitTest& m) {
     return m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
   };
@@ -543,10 +571,11 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
     const MisfitTest& m = *first_misfit;
     result.verdict = Verdict::kUnexplained;
     std::string best = "none";
-    if (chosen != nullptr) best = score_of(final).label() + " (named nothing: it leaves this behind)";
+    if (chosen != nullptr)
+      best = score_of(final).label() + " (named nothing: it leaves this behind)";
     result.summary = "Unexplained residual (" + title + "): " + m.channel + " " + m.label + " (" +
-                     fmt(m.z, 3) + " sigma, " + fmt(m.size, 2) + " noise sigmas) after the best library candidate " +
-                     best + ".";
+                     fmt(m.z, 3) + " sigma, " + fmt(m.size, 2) +
+                     " noise sigmas) after the best library candidate " + best + ".";
   } else if (chosen == nullptr) {
     result.verdict = Verdict::kNoSignificantGap;
     double best_z = 0.0;
@@ -559,8 +588,10 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
         best = f.effects[0]->name;
       }
     }
-    result.summary = "No significant gap (" + title + "): the model agrees with the run to within its noise "
-                     "(most significant candidate " + best + " at " + fmt(best_z, 2) + " sigma, below " +
+    result.summary = "No significant gap (" + title +
+                     "): the model agrees with the run to within its noise "
+                     "(most significant candidate " +
+                     best + " at " + fmt(best_z, 2) + " sigma, below " +
                      fmt(options.min_z_name, 2) + ", or too small to matter).";
   } else {
     result.verdict = Verdict::kNamed;
@@ -583,12 +614,15 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
         fe.sigmas.push_back(s.sigmas[i]);
         fe.fit_values.push_back(final.fit.values[i]);
         for (std::size_t l = 0; l < m; ++l) {
-          fe.fit_covariance[k * m + l] = final.fit.covariance.empty() ? 0.0 : final.fit.covariance[(first + k) * p + first + l];
+          fe.fit_covariance[k * m + l] = final.fit.covariance.empty()
+                                             ? 0.0
+                                             : final.fit.covariance[(first + k) * p + first + l];
         }
         const double res = c.fit_resolution(k, final.fit.values[i]);
         fe.fit_covariance[k * m + k] += res * res;
         const double partial = std::sqrt(std::max(fe.fit_covariance[k * m + k], 0.0));
-        fe.partial_sigmas.push_back(c.inverse[k] ? c.sigma(k, final.fit.values[i], partial) : partial);
+        fe.partial_sigmas.push_back(c.inverse[k] ? c.sigma(k, final.fit.values[i], partial)
+                                                 : partial);
       }
       std::vector<double> zero(m, 0.0);
       (void)mahalanobis_squared(zero, fe.fit_covariance, fe.observable_combinations);
@@ -603,7 +637,8 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
                      " sigma, an RMS change of " + sizes +
                      " noise sigmas; what remains shows no pattern.";
   }
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  result.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
 }
 

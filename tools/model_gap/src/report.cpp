@@ -1,12 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -54,25 +53,34 @@ json question_json(const QuestionResult& q) {
     }
     json z = json::array();
     for (double v : c.z) z.push_back(number(v));
-    cands.push_back({{"effects", c.effects}, {"ok", c.ok}, {"parameters", params}, {"z", z},
-                     {"bic", number(c.bic)}, {"delta_bic", number(c.delta_bic)},
-                     {"explained", number(c.explained)}, {"iterations", c.iterations}});
+    cands.push_back({{"effects", c.effects},
+                     {"ok", c.ok},
+                     {"parameters", params},
+                     {"z", z},
+                     {"bic", number(c.bic)},
+                     {"delta_bic", number(c.delta_bic)},
+                     {"explained", number(c.explained)},
+                     {"iterations", c.iterations}});
   }
   j["candidates"] = cands;
   json misfits = json::array();
   for (const auto& m : q.misfits) {
-    misfits.push_back({{"test", m.test}, {"channel", m.channel}, {"label", m.label},
-                       {"z", number(m.z)}, {"share", number(m.share)}});
+    misfits.push_back({{"test", m.test},
+                       {"channel", m.channel},
+                       {"label", m.label},
+                       {"z", number(m.z)},
+                       {"share", number(m.share)}});
   }
   j["misfit_tests"] = misfits;
   json chans = json::array();
   for (const auto& c : q.channels) {
-    chans.push_back({{"name", c.info.name},
-                     {"unit", c.info.unit},
-                     {"noise_sigma", number(c.noise_sigma)},
-                     {"rms", {{"before", number(c.rms_before)}, {"after", number(c.rms_after)}}},
-                     {"whitened_rms", {{"before", number(c.whitened_rms_before)},
-                                       {"after", number(c.whitened_rms_after)}}}});
+    chans.push_back(
+        {{"name", c.info.name},
+         {"unit", c.info.unit},
+         {"noise_sigma", number(c.noise_sigma)},
+         {"rms", {{"before", number(c.rms_before)}, {"after", number(c.rms_after)}}},
+         {"whitened_rms",
+          {{"before", number(c.whitened_rms_before)}, {"after", number(c.whitened_rms_after)}}}});
   }
   j["channels"] = chans;
   j["wall_time_s"] = q.wall_time_s;
@@ -84,11 +92,13 @@ json report_json(const GapResult& r) {
   j["run"] = r.run_source;
   j["robot"] = r.nominal.name;
   j["model"] = r.nominal.source_file;
-  j["verdicts"] = {{"sensor_to_pose", verdict_name(r.sensor.verdict)},
-                   {"command_to_motion", r.command_assessed ? verdict_name(r.command.verdict) : "not assessed"}};
+  j["verdicts"] = {
+      {"sensor_to_pose", verdict_name(r.sensor.verdict)},
+      {"command_to_motion", r.command_assessed ? verdict_name(r.command.verdict) : "not assessed"}};
   j["summary"] = r.summary;
   json named = effects_json(r.sensor.named, Question::kSensorToPose);
-  for (const auto& e : effects_json(r.command.named, Question::kCommandToMotion)) named.push_back(e);
+  for (const auto& e : effects_json(r.command.named, Question::kCommandToMotion))
+    named.push_back(e);
   j["named_effects"] = named;
   j["questions"] = json::array({question_json(r.sensor)});
   if (r.command_assessed) j["questions"].push_back(question_json(r.command));
@@ -100,11 +110,19 @@ json report_json(const GapResult& r) {
                      {"max_effects", r.options.question.max_effects}};
   json poses = json::array();
   for (const auto& p : r.pose_gaps) {
-    poses.push_back({{"question", question_name(p.question)},
-                     {"rms_position_m", {{"before", number(p.rms_position_m_before)}, {"after", number(p.rms_position_m_after)}}},
-                     {"final_position_m", {{"before", number(p.final_position_m_before)}, {"after", number(p.final_position_m_after)}}},
-                     {"rms_heading_rad", {{"before", number(p.rms_heading_rad_before)}, {"after", number(p.rms_heading_rad_after)}}},
-                     {"final_heading_rad", {{"before", number(p.final_heading_rad_before)}, {"after", number(p.final_heading_rad_after)}}}});
+    poses.push_back(
+        {{"question", question_name(p.question)},
+         {"rms_position_m",
+          {{"before", number(p.rms_position_m_before)}, {"after", number(p.rms_position_m_after)}}},
+         {"final_position_m",
+          {{"before", number(p.final_position_m_before)},
+           {"after", number(p.final_position_m_after)}}},
+         {"rms_heading_rad",
+          {{"before", number(p.rms_heading_rad_before)},
+           {"after", number(p.rms_heading_rad_after)}}},
+         {"final_heading_rad",
+          {{"before", number(p.final_heading_rad_before)},
+           {"after", number(p.final_heading_rad_after)}}}});
   }
   j["gap"]["pose"] = poses;
   json segs = json::array();
@@ -193,8 +211,9 @@ std::string plot_script(const GapResult& r) {
   for (const QuestionResult* q : {&r.sensor, &r.command}) {
     for (const ChannelGap& c : q->channels) {
       g << "set title '" << c.info.name << " (" << c.info.unit << ")'\nset ylabel ''\n"
-        << "plot 'windows.dat' u 1:" << column << " w l lc rgb '#d62728' t 'nominal', '' u 1:"
-        << column + 1 << " w l lc rgb '#2ca02c' t 'augmented'\n";
+        << "plot 'windows.dat' u 1:" << column
+        << " w l lc rgb '#d62728' t 'nominal', '' u 1:" << column + 1
+        << " w l lc rgb '#2ca02c' t 'augmented'\n";
       column += 2;
     }
   }
@@ -208,7 +227,8 @@ bool run_gnuplot(const std::string& dir) {
 }
 
 void question_markdown(std::ostringstream& md, const QuestionResult& q, const QuestionOptions& o) {
-  md << "## " << question_title(q.question) << ": " << verdict_name(q.verdict) << "\n\n" << q.summary << "\n\n";
+  md << "## " << question_title(q.question) << ": " << verdict_name(q.verdict) << "\n\n"
+     << q.summary << "\n\n";
   if (!q.named.empty()) {
     md << "| effect | parameter | value | 1 sigma | significance |\n|---|---|---|---|---|\n";
     bool partial = false;
@@ -217,8 +237,9 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
         const bool alone = std::isfinite(e.sigmas[i]);
         partial = partial || !alone;
         md << "| " << e.name << " | " << (e.limits ? "limits." : "") << e.keys[i] << " | "
-           << fmt(e.values[i], 6) << " | " << (alone ? fmt(e.sigmas[i], 2) : fmt(e.partial_sigmas[i], 2) + " *")
-           << " | " << fmt(e.z, 3) << " sigma |\n";
+           << fmt(e.values[i], 6) << " | "
+           << (alone ? fmt(e.sigmas[i], 2) : fmt(e.partial_sigmas[i], 2) + " *") << " | "
+           << fmt(e.z, 3) << " sigma |\n";
       }
     }
     md << "\n";
@@ -229,29 +250,35 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
           md << e.name << ": " << e.observable_combinations << " of " << e.keys.size() << "; ";
         }
       }
-      md << "the rest stay at the model's values); the sigma is that of the part the run fixes.\n\n";
+      md << "the rest stay at the model's values); the sigma is that of the part the run "
+            "fixes.\n\n";
     }
   }
-  md << "| channel | unit | noise (1 sigma) | RMS before | RMS after | shrink | whitened RMS before -> after |\n"
+  md << "| channel | unit | noise (1 sigma) | RMS before | RMS after | shrink | whitened RMS "
+        "before -> after |\n"
      << "|---|---|---|---|---|---|---|\n";
   for (const auto& c : q.channels) {
     md << "| " << c.info.name << " | " << c.info.unit << " | " << fmt(c.noise_sigma, 3) << " | "
-       << fmt(c.rms_before) << " | " << fmt(c.rms_after) << " | " << ratio(c.rms_before, c.rms_after)
-       << " | " << fmt(c.whitened_rms_before, 3) << " -> " << fmt(c.whitened_rms_after, 3) << " |\n";
+       << fmt(c.rms_before) << " | " << fmt(c.rms_after) << " | "
+       << ratio(c.rms_before, c.rms_after) << " | " << fmt(c.whitened_rms_before, 3) << " -> "
+       << fmt(c.whitened_rms_after, 3) << " |\n";
   }
   md << "\nTests for what the library does not hold, on the residual that remains (most "
         "significant first; a test at or above "
      << fmt(o.min_z_misfit, 3) << " sigma makes the residual unexplained):\n\n";
   for (std::size_t i = 0; i < q.misfits.size() && i < 5; ++i) {
     const MisfitTest& m = q.misfits[i];
-    md << "- " << m.test << " on `" << m.channel << "`: " << m.label << ", " << fmt(m.z, 3) << " sigma\n";
+    md << "- " << m.test << " on `" << m.channel << "`: " << m.label << ", " << fmt(m.z, 3)
+       << " sigma\n";
   }
-  md << "\nCandidates (best BIC first):\n\n| effects | parameters | significance | delta BIC | explained |\n"
+  md << "\nCandidates (best BIC first):\n\n| effects | parameters | significance | delta BIC | "
+        "explained |\n"
      << "|---|---|---|---|---|\n";
   for (const auto& c : q.candidates) {
     md << "| " << c.label() << " | ";
     for (std::size_t i = 0; i < c.param_names.size(); ++i) {
-      md << (i ? ", " : "") << c.param_names[i] << " = " << fmt(c.values[i], 4) << " +- " << fmt(c.sigmas[i], 2);
+      md << (i ? ", " : "") << c.param_names[i] << " = " << fmt(c.values[i], 4) << " +- "
+         << fmt(c.sigmas[i], 2);
     }
     md << " | ";
     for (std::size_t i = 0; i < c.z.size(); ++i) md << (i ? ", " : "") << fmt(c.z[i], 3);
@@ -263,22 +290,26 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
 std::string markdown(const GapResult& r, bool plots) {
   std::ostringstream md;
   md << "# Model-gap report: " << r.nominal.name << "\n\n"
-     << "Run `" << r.run_source << "`, model `" << r.nominal.source_file << "`. Each question is decided "
+     << "Run `" << r.run_source << "`, model `" << r.nominal.source_file
+     << "`. Each question is decided "
      << "on its own; a gap in one never vetoes a finding in the other.\n\n"
-     << "| question | verdict |\n|---|---|\n| sensor to pose | " << verdict_name(r.sensor.verdict) << " |\n"
-     << "| command to motion | " << (r.command_assessed ? verdict_name(r.command.verdict) : "not assessed")
-     << " |\n\n";
+     << "| question | verdict |\n|---|---|\n| sensor to pose | " << verdict_name(r.sensor.verdict)
+     << " |\n"
+     << "| command to motion | "
+     << (r.command_assessed ? verdict_name(r.command.verdict) : "not assessed") << " |\n\n";
   if (!r.named().empty()) {
     md << "The augmented model is `model_augmented.yaml`: the nominal model with the named effects "
           "(limits go to its `limits:` section).\n\n";
   }
   md << "## Gap over the whole run\n\n"
-     << "| replay | RMS position (m) | final position (m) | RMS heading (rad) | final heading (rad) |\n"
+     << "| replay | RMS position (m) | final position (m) | RMS heading (rad) | final heading "
+        "(rad) |\n"
      << "|---|---|---|---|---|\n";
   for (const auto& p : r.pose_gaps) {
     md << "| " << question_title(p.question) << " | " << fmt(p.rms_position_m_before) << " -> "
-       << fmt(p.rms_position_m_after) << " (" << ratio(p.rms_position_m_before, p.rms_position_m_after)
-       << ") | " << fmt(p.final_position_m_before) << " -> " << fmt(p.final_position_m_after) << " | "
+       << fmt(p.rms_position_m_after) << " ("
+       << ratio(p.rms_position_m_before, p.rms_position_m_after) << ") | "
+       << fmt(p.final_position_m_before) << " -> " << fmt(p.final_position_m_after) << " | "
        << fmt(p.rms_heading_rad_before) << " -> " << fmt(p.rms_heading_rad_after) << " | "
        << fmt(p.final_heading_rad_before) << " -> " << fmt(p.final_heading_rad_after) << " |\n";
   }
@@ -297,11 +328,15 @@ std::string markdown(const GapResult& r, bool plots) {
   double durations[4] = {0, 0, 0, 0};
   for (const auto& s : r.segments) durations[static_cast<int>(s.kind)] += s.end_s - s.start_s;
   for (int p = 0; p < 4; ++p) {
-    md << (p ? ", " : "") << phase_name(static_cast<PhaseKind>(p)) << " " << fmt(durations[p], 4) << " s";
+    md << (p ? ", " : "") << phase_name(static_cast<PhaseKind>(p)) << " " << fmt(durations[p], 4)
+       << " s";
   }
-  md << ".\n\nSelection: per question, the single effect with the lowest BIC among those significant at "
-     << fmt(r.options.question.min_z_name, 3) << " sigma or more (likelihood-ratio test, widened for the residuals' autocorrelation over "
-     << fmt(r.options.window_s, 3) << " s windows), then a second one when it is significant in the pair and "
+  md << ".\n\nSelection: per question, the single effect with the lowest BIC among those "
+        "significant at "
+     << fmt(r.options.question.min_z_name, 3)
+     << " sigma or more (likelihood-ratio test, widened for the residuals' autocorrelation over "
+     << fmt(r.options.window_s, 3)
+     << " s windows), then a second one when it is significant in the pair and "
         "lowers the BIC further. Workflow time "
      << fmt(r.wall_time_s, 3) << " s.\n";
   return md.str();

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
+#include "swivel/model_gap/run_data.hpp"
+
 #include <cmath>
 #include <limits>
 #include <numbers>
 
-#include "swivel/model_gap/run_data.hpp"
 #include "swivel/model_gap/run_log_adapter.hpp"
 #include "swivel/run_log.hpp"
 

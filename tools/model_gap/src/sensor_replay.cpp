@@ -27,9 +27,10 @@ double half_signed_square(double w) { return 0.5 * w * std::abs(w); }
 
 void check_run_fits_model(const RobotModel& model, const RunData& run) {
   if (run.drivetrain != model.drivetrain) {
-    throw std::invalid_argument("run " + run.source + " is from a " +
-                                (run.drivetrain == DrivetrainKind::kSwpc ? "swpc" : "differential") +
-                                " robot but model " + model.source_file + " is not");
+    throw std::invalid_argument(
+        "run " + run.source + " is from a " +
+        (run.drivetrain == DrivetrainKind::kSwpc ? "swpc" : "differential") + " robot but model " +
+        model.source_file + " is not");
   }
   if (run.module_count != model.module_count()) {
     throw std::invalid_argument("run " + run.source + " has " + std::to_string(run.module_count) +
@@ -48,7 +49,8 @@ Pose2 run_start_pose(const RunData& run) {
   double syaw = 0.0;
   double count = 0.0;
   for (std::size_t k = 0; k < run.size(); ++k) {
-    const bool moving = run.cmd_vx_mps[k] != 0.0 || run.cmd_vy_mps[k] != 0.0 || run.cmd_wz_radps[k] != 0.0;
+    const bool moving =
+        run.cmd_vx_mps[k] != 0.0 || run.cmd_vy_mps[k] != 0.0 || run.cmd_wz_radps[k] != 0.0;
     if (count > 0.0 && (moving || run.t_s[k] - run.t_s[0] > 1.0)) break;
     if (!std::isfinite(run.truth_x_m[k])) continue;
     sx += run.truth_x_m[k];
@@ -79,7 +81,8 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
       const std::size_t lo = k >= 2 ? k - 2 : 0;
       const std::size_t hi = std::min(n - 1, k + 2);
       const double dt = run.t_s[hi] - run.t_s[lo];
-      slip_h_[i][k] = dt > 0.0 ? half_signed_square((run.wheel_rad[i][hi] - run.wheel_rad[i][lo]) / dt) : 0.0;
+      slip_h_[i][k] =
+          dt > 0.0 ? half_signed_square((run.wheel_rad[i][hi] - run.wheel_rad[i][lo]) / dt) : 0.0;
     }
   }
   const auto add = [this](const char* name, const char* unit, ChannelKind kind) {
@@ -123,7 +126,8 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row)
     const double dt = run.t_s[k] - run.t_s[k - 1];
     for (std::size_t i = 0; i < modules_; ++i) {
       // The contact point rolls less than the wheel turns while it speeds up.
-      dpsi[i] = run.wheel_rad[i][k] - run.wheel_rad[i][k - 1] - g * (slip_h_[i][k] - slip_h_[i][k - 1]);
+      dpsi[i] =
+          run.wheel_rad[i][k] - run.wheel_rad[i][k - 1] - g * (slip_h_[i][k] - slip_h_[i][k - 1]);
     }
     Pose2 delta;
     if (!swpc_) {
@@ -135,10 +139,11 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row)
         steer_rate[i] = dphi / dt;
         wheel_rate[i] = dpsi[i] / dt;
       }
-      const swpc::ForwardResult fit = swpc::forward(
-          std::span<const SwpcModuleParams>(plant.modules.data(), modules_),
-          std::span<const double>(phi.data(), modules_), std::span<const double>(steer_rate.data(), modules_),
-          std::span<const double>(wheel_rate.data(), modules_));
+      const swpc::ForwardResult fit =
+          swpc::forward(std::span<const SwpcModuleParams>(plant.modules.data(), modules_),
+                        std::span<const double>(phi.data(), modules_),
+                        std::span<const double>(steer_rate.data(), modules_),
+                        std::span<const double>(wheel_rate.data(), modules_));
       if (!fit.ok) return false;
       delta = swpc::integrate_twist(fit.twist, dt);
     }
@@ -180,7 +185,9 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, std::vector<double>&
   std::size_t end_row = run_->size();
   if (used > 0 && used < w) {
     end_row = windows_[used - 1].b + 1;
-    while (end_row < run_->size() && run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + kMaxLatencyS) ++end_row;
+    while (end_row < run_->size() &&
+           run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + kMaxLatencyS)
+      ++end_row;
   }
   if (!integrate(plant, end_row)) return false;
   // Encoders and gyro lag motion capture by the delay: what they say at t + delay is where

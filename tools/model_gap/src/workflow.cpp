@@ -28,7 +28,8 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // Derivative by central differences over +-h rows.
-std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& v, std::size_t h) {
+std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& v,
+                               std::size_t h) {
   const std::size_t n = t.size();
   std::vector<double> d(n, kNaN);
   for (std::size_t k = h; k + h < n; ++k) d[k] = (v[k + h] - v[k - h]) / (t[k + h] - t[k - h]);
@@ -72,8 +73,11 @@ PoseGap pose_gap(Question q, const RunData& run, const std::vector<Pose2>& befor
   g.question = q;
   double sb = 0.0, sa = 0.0, hb = 0.0, ha = 0.0, count = 0.0;
   for (std::size_t k = 0; k < run.size(); ++k) {
-    if (!std::isfinite(run.truth_x_m[k]) || !std::isfinite(before[k].x_m) || !std::isfinite(after[k].x_m)) continue;
-    const double pb = std::hypot(run.truth_x_m[k] - before[k].x_m, run.truth_y_m[k] - before[k].y_m);
+    if (!std::isfinite(run.truth_x_m[k]) || !std::isfinite(before[k].x_m) ||
+        !std::isfinite(after[k].x_m))
+      continue;
+    const double pb =
+        std::hypot(run.truth_x_m[k] - before[k].x_m, run.truth_y_m[k] - before[k].y_m);
     const double pa = std::hypot(run.truth_x_m[k] - after[k].x_m, run.truth_y_m[k] - after[k].y_m);
     const double yb = wrap_pi(run.truth_yaw_rad[k] - before[k].yaw_rad);
     const double ya = wrap_pi(run.truth_yaw_rad[k] - after[k].yaw_rad);
@@ -126,7 +130,8 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   result.run_source = run.source;
   result.t_s = run.t_s;
   for (std::size_t k = 0; k < run.size(); ++k) {
-    result.motion_capture.push_back(Pose2{run.truth_x_m[k], run.truth_y_m[k], run.truth_yaw_rad[k]});
+    result.motion_capture.push_back(
+        Pose2{run.truth_x_m[k], run.truth_y_m[k], run.truth_yaw_rad[k]});
   }
   result.segments = phase_segments(classify_phases(run.commands()), run.t_s);
 
@@ -134,9 +139,10 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   const std::vector<Window>& windows = sensors.windows();
   const std::size_t w = windows.size();
   if (w < 10) {
-    throw std::invalid_argument("run " + run.source + " gives " + std::to_string(w) + " windows of " +
-                                std::to_string(options.window_s) +
-                                " s with motion capture at both ends; the workflow needs at least 10");
+    throw std::invalid_argument(
+        "run " + run.source + " gives " + std::to_string(w) + " windows of " +
+        std::to_string(options.window_s) +
+        " s with motion capture at both ends; the workflow needs at least 10");
   }
   const WindowMotion& motion = sensors.motion();
   for (std::size_t j = 0; j < w; ++j) result.window_start_s.push_back(motion.start_s[j]);
@@ -160,14 +166,15 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   QuestionReplay sq;
   sq.channels = sensors.channels();
   sq.windows = w;
-  sq.residuals = [&sensors](const RobotModel& model, std::span<const double>, std::vector<double>& out,
-                            std::size_t window_limit) {
+  sq.residuals = [&sensors](const RobotModel& model, std::span<const double>,
+                            std::vector<double>& out, std::size_t window_limit) {
     return sensors.residuals(sim::resolve_plant(model), out, window_limit);
   };
   for (std::size_t c = 0; c < sq.channels.size(); ++c) {
     sq.noise_x.push_back(travel_sq);
-    sq.noise_floor.push_back(sq.channels[c].kind == ChannelKind::kPosition ? position_floor(nominal)
-                                                                          : heading_floor(nominal));
+    sq.noise_floor.push_back(sq.channels[c].kind == ChannelKind::kPosition
+                                 ? position_floor(nominal)
+                                 : heading_floor(nominal));
   }
   sq.own_change.resize(sq.channels.size() * w);
   for (std::size_t j = 0; j < w; ++j) {
@@ -183,7 +190,8 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   sensors.path(sim::resolve_plant(nominal), result.dead_reckoning_before);
   const MotionPeaks peaks = motion_peaks(run, result.dead_reckoning_before);
   result.sensor = analyse_question(Question::kSensorToPose, nominal, sq,
-                                   candidate_library(nominal, Question::kSensorToPose, peaks), options.question);
+                                   candidate_library(nominal, Question::kSensorToPose, peaks),
+                                   options.question);
   // The command question starts from what the sensors showed, unless they showed something
   // the library cannot name.
   const RobotModel command_base =
@@ -209,11 +217,13 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
     for (std::size_t c = 0; c < cq.channels.size(); ++c) {
       const ChannelInfo& info = cq.channels[c];
       const bool steer = info.kind == ChannelKind::kSteerAngle;
-      const std::vector<double>& angle = steer ? run.steer_rad[info.module] : run.wheel_rad[info.module];
+      const std::vector<double>& angle =
+          steer ? run.steer_rad[info.module] : run.wheel_rad[info.module];
       cq.noise_x.push_back(steer ? steer_sq : travel_sq);
       cq.noise_floor.push_back(count_floor(steer ? nominal.sensors.steering_encoder_counts_per_rev
                                                  : nominal.sensors.wheel_encoder_counts_per_rev));
-      for (std::size_t j = 0; j < w; ++j) cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
+      for (std::size_t j = 0; j < w; ++j)
+        cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
     }
     cq.known_variance_of = [&commands](const RobotModel& model, std::span<const double> nuisance) {
       return commands.timing_variance(model, nuisance.empty() ? 0.0 : nuisance[0]);
@@ -222,9 +232,9 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
     cq.start_yaw_rad = start_yaw;
     cq.wheel_sin_change = motion.wheel_sin_change;
     cq.wheel_cos_change = motion.wheel_cos_change;
-    result.command = analyse_question(Question::kCommandToMotion, command_base, cq,
-                                      candidate_library(command_base, Question::kCommandToMotion, peaks, row),
-                                      options.question);
+    result.command = analyse_question(
+        Question::kCommandToMotion, command_base, cq,
+        candidate_library(command_base, Question::kCommandToMotion, peaks, row), options.question);
     result.command_delay_s = result.command.nuisance.empty() ? 0.0 : result.command.nuisance[0];
     if (result.command.verdict == Verdict::kNamed) result.augmented = result.command.augmented;
     commands.path(nominal, result.command_delay_s, result.replay_before);
@@ -237,8 +247,8 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   result.pose_gaps.push_back(pose_gap(Question::kSensorToPose, run, result.dead_reckoning_before,
                                       result.dead_reckoning_after));
   if (result.command_assessed) {
-    result.pose_gaps.push_back(pose_gap(Question::kCommandToMotion, run, result.replay_before,
-                                        result.replay_after));
+    result.pose_gaps.push_back(
+        pose_gap(Question::kCommandToMotion, run, result.replay_before, result.replay_after));
   }
   result.summary = result.sensor.summary + "\n" + result.command.summary;
   result.wall_time_s =

@@ -88,11 +88,13 @@ CaseOutcome run_case(const independent::BatteryCase& c, const GapOptions& option
     } else if (hidden.empty()) {
       if (out.verdict[i] != Verdict::kNoSignificantGap) {
         correct = false;
-        problem << question << ": " << verdict_name(out.verdict[i]) << " (" << list(named) << ") where nothing is hidden; ";
+        problem << question << ": " << verdict_name(out.verdict[i]) << " (" << list(named)
+                << ") where nothing is hidden; ";
       }
     } else if (out.verdict[i] != Verdict::kNamed || named != hidden) {
       correct = false;
-      problem << question << ": " << verdict_name(out.verdict[i]) << " " << list(named) << ", hidden " << list(hidden) << "; ";
+      problem << question << ": " << verdict_name(out.verdict[i]) << " " << list(named)
+              << ", hidden " << list(hidden) << "; ";
     }
   }
   out.correct = correct;
@@ -101,8 +103,10 @@ CaseOutcome run_case(const independent::BatteryCase& c, const GapOptions& option
   // Values of the hidden parameters that were named.
   out.values_within_3_sigma = correct;
   for (const auto& e : c.expected) {
-    const QuestionResult& q = question_of(e.effect) == Question::kSensorToPose ? r.sensor : r.command;
-    const auto f = std::find_if(q.named.begin(), q.named.end(), [&](const FittedEffect& x) { return x.name == e.effect; });
+    const QuestionResult& q =
+        question_of(e.effect) == Question::kSensorToPose ? r.sensor : r.command;
+    const auto f = std::find_if(q.named.begin(), q.named.end(),
+                                [&](const FittedEffect& x) { return x.name == e.effect; });
     if (f == q.named.end()) continue;
     std::vector<double> difference(f->keys.size(), 0.0);
     for (const auto& p : e.params) {

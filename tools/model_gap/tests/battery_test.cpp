@@ -30,26 +30,28 @@ TEST_P(BatterySubsetTest, AnswersAsTheBatteryRequires) {
   if (c.kind == independent::CaseKind::kSingle || c.kind == independent::CaseKind::kPair) {
     std::string values;
     for (const auto& p : o.params) {
-      values += "\n  " + p.effect + "." + p.key + ": truth " + std::to_string(p.truth) + ", fitted " +
-                std::to_string(p.value) + " +- " + std::to_string(p.sigma);
+      values += "\n  " + p.effect + "." + p.key + ": truth " + std::to_string(p.truth) +
+                ", fitted " + std::to_string(p.value) + " +- " + std::to_string(p.sigma);
     }
     EXPECT_TRUE(o.values_within_3_sigma) << values;
   }
   if (c.kind == independent::CaseKind::kOutside) {
     // Outside the library: said so, not only left unnamed.
     EXPECT_TRUE(o.verdict[0] == Verdict::kUnexplained || o.verdict[1] == Verdict::kUnexplained)
-        << o.summary[0] << "\n" << o.summary[1];
+        << o.summary[0] << "\n"
+        << o.summary[1];
   }
 }
 
 std::string case_name(const ::testing::TestParamInfo<independent::BatteryCase>& info) {
   std::string name;
-  for (char ch : info.param.id) name += (std::isalnum(static_cast<unsigned char>(ch)) != 0) ? ch : '_';
+  for (char ch : info.param.id)
+    name += (std::isalnum(static_cast<unsigned char>(ch)) != 0) ? ch : '_';
   return name;
 }
 
-INSTANTIATE_TEST_SUITE_P(Subset, BatterySubsetTest, ::testing::ValuesIn(independent::battery_subset()),
-                         case_name);
+INSTANTIATE_TEST_SUITE_P(Subset, BatterySubsetTest,
+                         ::testing::ValuesIn(independent::battery_subset()), case_name);
 
 }  // namespace
 }  // namespace swivel::model_gap

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
+#include "swivel/model_gap/fit.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
-
-#include "swivel/model_gap/fit.hpp"
 
 namespace swivel::model_gap {
 namespace {
@@ -65,7 +65,8 @@ TEST(FitTest, BicPrefersTheTrueModelOverAnExtraParameter) {
   FitProblem p3 = decay_problem(d);
   p3.residuals = [&d](std::span<const double> th, std::vector<double>& r) {
     r.resize(d.t.size());
-    for (std::size_t k = 0; k < d.t.size(); ++k) r[k] = (d.y[k] - th[0] * std::exp(-th[1] * d.t[k])) / d.sigma;
+    for (std::size_t k = 0; k < d.t.size(); ++k)
+      r[k] = (d.y[k] - th[0] * std::exp(-th[1] * d.t[k])) / d.sigma;
     return th[2] == th[2];
   };
   std::vector<ParamSpec> specs = kSpecs;
@@ -106,7 +107,8 @@ TEST(FitTest, UncertaintiesAreCalibratedForWhiteAndCorrelatedNoise) {
 
 TEST(FitTest, ChiSquareAsANormalDeviate) {
   // One degree of freedom: the deviate itself.
-  for (double z : {0.5, 1.0, 3.0, 5.0, 12.0, 40.0}) EXPECT_NEAR(chi_square_z(z * z, 1.0), z, 1e-6 * z) << z;
+  for (double z : {0.5, 1.0, 3.0, 5.0, 12.0, 40.0})
+    EXPECT_NEAR(chi_square_z(z * z, 1.0), z, 1e-6 * z) << z;
   // Two: the tail is exp(-chi2 / 2); at chi2 = 2 ln(1 / 0.0455) it matches 2 sigma.
   EXPECT_NEAR(chi_square_z(2.0 * std::log(1.0 / 0.0455003), 2.0), 2.0, 1e-4);
   EXPECT_GT(chi_square_z(60.0, 4.0), 6.0);

@@ -37,15 +37,38 @@ RobotModel robot(const std::string& name) {
 Twist2 pattern_command(double t_s, bool holonomic) {
   const double t = std::fmod(t_s, 20.0);
   Twist2 c;
-  c.vx_mps = knots(t, {{1.5, 0.0}, {2.5, 0.4}, {6.0, 0.4}, {6.5, 0.3}, {9.0, 0.3}, {9.5, 0.2},
-                       {10.5, 0.2}, {11.0, 0.0}, {14.0, 0.0}, {14.5, 0.5}, {17.0, 0.5},
+  c.vx_mps = knots(t, {{1.5, 0.0},
+                       {2.5, 0.4},
+                       {6.0, 0.4},
+                       {6.5, 0.3},
+                       {9.0, 0.3},
+                       {9.5, 0.2},
+                       {10.5, 0.2},
+                       {11.0, 0.0},
+                       {14.0, 0.0},
+                       {14.5, 0.5},
+                       {17.0, 0.5},
                        {18.0, 0.0}});
-  c.wz_radps = knots(t, {{6.0, 0.0}, {6.5, 0.6}, {8.5, 0.6}, {9.0, 0.0}, {11.0, 0.0},
-                         {11.5, -0.8}, {13.5, -0.8}, {14.0, 0.0}, {14.5, 0.2}, {17.0, 0.2},
+  c.wz_radps = knots(t, {{6.0, 0.0},
+                         {6.5, 0.6},
+                         {8.5, 0.6},
+                         {9.0, 0.0},
+                         {11.0, 0.0},
+                         {11.5, -0.8},
+                         {13.5, -0.8},
+                         {14.0, 0.0},
+                         {14.5, 0.2},
+                         {17.0, 0.2},
                          {17.5, 0.0}});
   if (holonomic) {
-    c.vy_mps = knots(t, {{2.5, 0.0}, {3.0, 0.15}, {5.5, 0.15}, {6.0, 0.0}, {14.0, 0.0},
-                         {14.5, -0.25}, {16.5, -0.25}, {17.0, 0.0}});
+    c.vy_mps = knots(t, {{2.5, 0.0},
+                         {3.0, 0.15},
+                         {5.5, 0.15},
+                         {6.0, 0.0},
+                         {14.0, 0.0},
+                         {14.5, -0.25},
+                         {16.5, -0.25},
+                         {17.0, 0.0}});
   }
   return c;
 }
@@ -56,7 +79,8 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
   options.seed = seed;
   const bool swpc = nominal.drivetrain == DrivetrainKind::kSwpc;
   // The casters start trailing the first motion, as `swivel-lab simulate` starts them.
-  options.initial_steer_rad = sim::aligned_steer_angles(sim::resolve_plant(truth), pattern_command(2.0, swpc));
+  options.initial_steer_rad =
+      sim::aligned_steer_angles(sim::resolve_plant(truth), pattern_command(2.0, swpc));
   sim::World world(truth, options);
   RunLog log;
   log.source = "simulated";
@@ -81,7 +105,8 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
     if (k + 1 == rows) break;
     for (int s = 0; s < control_steps; ++s) {
       for (std::size_t i = 0; i < nominal.module_count(); ++i) {
-        measured.steer_angle_rad[i] = world.true_steer_rad(i) - plant.modules[i].steering_offset_rad;
+        measured.steer_angle_rad[i] =
+            world.true_steer_rad(i) - plant.modules[i].steering_offset_rad;
       }
       controller.velocity(pattern_command(t + s * h, swpc), measured, command);
       if (world.step(h, command) != Status::kOk) throw std::runtime_error(world.last_error());

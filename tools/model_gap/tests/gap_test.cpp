@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,11 +7,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "gap_fixtures.hpp"
 #include "swivel/model_gap/run_log_adapter.hpp"
@@ -52,7 +50,8 @@ GapResult analyse_hidden(const HiddenCase& c, std::uint64_t seed = 7) {
   const RobotModel nominal = testing::robot(c.robot);
   RobotModel truth = nominal;
   for (const auto& h : c.hidden) truth.effects[h.effect][h.param] = h.value;
-  return analyse_gap(nominal, to_run_data(testing::simulate_run(nominal, truth, c.duration_s, seed)));
+  return analyse_gap(nominal,
+                     to_run_data(testing::simulate_run(nominal, truth, c.duration_s, seed)));
 }
 
 const QuestionResult& answer(const GapResult& r, Question q) {
@@ -67,8 +66,9 @@ TEST_P(HiddenEffectTest, NamesTheHiddenEffectUnderItsQuestion) {
   const HiddenCase& c = GetParam();
   const GapResult r = analyse_hidden(c);
   const QuestionResult& q = answer(r, c.question);
-  const QuestionResult& other = answer(r, c.question == Question::kSensorToPose ? Question::kCommandToMotion
-                                                                                 : Question::kSensorToPose);
+  const QuestionResult& other =
+      answer(r, c.question == Question::kSensorToPose ? Question::kCommandToMotion
+                                                      : Question::kSensorToPose);
   ASSERT_EQ(q.verdict, Verdict::kNamed) << q.summary;
   EXPECT_EQ(other.verdict, Verdict::kNoSignificantGap) << other.summary;
   ASSERT_EQ(q.named.size(), 1U) << q.summary;
@@ -87,16 +87,26 @@ TEST_P(HiddenEffectTest, NamesTheHiddenEffectUnderItsQuestion) {
 INSTANTIATE_TEST_SUITE_P(
     Docent, HiddenEffectTest,
     ::testing::Values(
-        HiddenCase{"docent", {{"gyro_bias", "bias_rad_s", 0.005, 0.0003}}, Question::kSensorToPose, 40.0},
-        HiddenCase{"docent", {{"track_width", "scale", 1.05, 0.002}}, Question::kSensorToPose, 40.0},
-        HiddenCase{"docent", {{"actuator_lag", "time_constant_s", 0.08, 0.003}}, Question::kCommandToMotion, 40.0}),
+        HiddenCase{
+            "docent", {{"gyro_bias", "bias_rad_s", 0.005, 0.0003}}, Question::kSensorToPose, 40.0},
+        HiddenCase{
+            "docent", {{"track_width", "scale", 1.05, 0.002}}, Question::kSensorToPose, 40.0},
+        HiddenCase{"docent",
+                   {{"actuator_lag", "time_constant_s", 0.08, 0.003}},
+                   Question::kCommandToMotion,
+                   40.0}),
     case_name);
 
 INSTANTIATE_TEST_SUITE_P(
     Swpc, HiddenEffectTest,
-    ::testing::Values(
-        HiddenCase{"swpc4", {{"caster_offset", "module_1_scale", 1.5, 0.1}}, Question::kSensorToPose, 60.0},
-        HiddenCase{"swpc4", {{"actuator_lag", "time_constant_s", 0.06, 0.004}}, Question::kCommandToMotion, 60.0}),
+    ::testing::Values(HiddenCase{"swpc4",
+                                 {{"caster_offset", "module_1_scale", 1.5, 0.1}},
+                                 Question::kSensorToPose,
+                                 60.0},
+                      HiddenCase{"swpc4",
+                                 {{"actuator_lag", "time_constant_s", 0.06, 0.004}},
+                                 Question::kCommandToMotion,
+                                 60.0}),
     case_name);
 
 TEST(NoHiddenEffectTest, NamesNothingOnEitherRobot) {
@@ -126,7 +136,8 @@ class MalformedLogTest : public ::testing::Test {
   std::string write_log(const std::string& name) {
     const RobotModel nominal = testing::robot("docent");
     const RunLog log = testing::simulate_run(nominal, nominal, 1.0, 3);
-    dir_ = std::filesystem::temp_directory_path() / ("swivel_gap_test_" + std::to_string(::getpid()));
+    dir_ =
+        std::filesystem::temp_directory_path() / ("swivel_gap_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
     const std::string path = (dir_ / name).string();
     RunLogWriter writer(path, log.header);
@@ -140,9 +151,11 @@ class MalformedLogTest : public ::testing::Test {
     for (std::string l; std::getline(in, l);) out.push_back(l);
     return out;
   }
-  static void write_lines(const std::string& path, const std::vector<std::string>& ls, bool final_newline) {
+  static void write_lines(const std::string& path, const std::vector<std::string>& ls,
+                          bool final_newline) {
     std::ofstream out(path, std::ios::trunc);
-    for (std::size_t i = 0; i < ls.size(); ++i) out << ls[i] << (i + 1 < ls.size() || final_newline ? "\n" : "");
+    for (std::size_t i = 0; i < ls.size(); ++i)
+      out << ls[i] << (i + 1 < ls.size() || final_newline ? "\n" : "");
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::filesystem::path dir_;
@@ -194,8 +207,10 @@ TEST_F(MalformedLogTest, RunTooShortForItsWindowsIsRefusedWithTheReason) {
 
 // The report files exist and the JSON names the effect with its uncertainty.
 TEST(ReportTest, WritesJsonMarkdownPlotsAndTheAugmentedModel) {
-  const GapResult r = analyse_hidden({"docent", {{"gyro_bias", "bias_rad_s", 0.005, 0.0}}, Question::kSensorToPose, 30.0});
-  const auto dir = std::filesystem::temp_directory_path() / ("swivel_gap_report_" + std::to_string(::getpid()));
+  const GapResult r = analyse_hidden(
+      {"docent", {{"gyro_bias", "bias_rad_s", 0.005, 0.0}}, Question::kSensorToPose, 30.0});
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("swivel_gap_report_" + std::to_string(::getpid()));
   write_report(r, dir.string());
   std::ifstream json(dir / "report.json");
   std::stringstream text;

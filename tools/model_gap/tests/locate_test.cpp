@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
+#include "swivel/model_gap/locate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "swivel/model_gap/locate.hpp"
 
 namespace swivel::model_gap {
 namespace {
@@ -27,10 +27,10 @@ CommandSeries drive_then_turn() {
 TEST(LocateTest, ClassifiesStandingAcceleratingStraightTurning) {
   const auto cmd = drive_then_turn();
   const auto phases = classify_phases(cmd);
-  EXPECT_EQ(phases[100], PhaseKind::kStanding);     // 1 s
-  EXPECT_EQ(phases[250], PhaseKind::kAccelerating); // 2.5 s
-  EXPECT_EQ(phases[550], PhaseKind::kStraight);     // 5.5 s
-  EXPECT_EQ(phases[1000], PhaseKind::kTurning);     // 10 s
+  EXPECT_EQ(phases[100], PhaseKind::kStanding);      // 1 s
+  EXPECT_EQ(phases[250], PhaseKind::kAccelerating);  // 2.5 s
+  EXPECT_EQ(phases[550], PhaseKind::kStraight);      // 5.5 s
+  EXPECT_EQ(phases[1000], PhaseKind::kTurning);      // 10 s
   const auto segments = phase_segments(phases, cmd.t_s);
   ASSERT_GE(segments.size(), 4U);
   EXPECT_EQ(segments.front().kind, PhaseKind::kStanding);

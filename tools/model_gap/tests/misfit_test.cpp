@@ -41,7 +41,8 @@ MisfitInputs noise_only(unsigned seed) {
   return in;
 }
 
-double z_of(const std::vector<MisfitTest>& tests, const std::string& test, const std::string& channel) {
+double z_of(const std::vector<MisfitTest>& tests, const std::string& test,
+            const std::string& channel) {
   for (const auto& t : tests) {
     if (t.test == test && t.channel == channel) return t.z;
   }
@@ -53,8 +54,8 @@ TEST(Misfit, NoiseAloneLeavesEveryTestQuiet) {
   for (unsigned seed = 1; seed <= 20; ++seed) {
     const auto tests = misfit_tests(noise_only(seed));
     ASSERT_FALSE(tests.empty());
-    EXPECT_LT(tests.front().z, 5.0) << "seed " << seed << ": " << tests.front().test << " on "
-                                    << tests.front().channel;
+    EXPECT_LT(tests.front().z, 5.0)
+        << "seed " << seed << ": " << tests.front().test << " on " << tests.front().channel;
   }
 }
 
@@ -80,7 +81,8 @@ TEST(Misfit, APatternWithTheWheelsTurnIsFound) {
 
 TEST(Misfit, ATrendAndAJumpAreFound) {
   MisfitInputs in = noise_only(9);
-  for (std::size_t j = 0; j < kWindows; ++j) in.residuals[2 * kWindows + j] += 1.0;  // a constant rate
+  for (std::size_t j = 0; j < kWindows; ++j)
+    in.residuals[2 * kWindows + j] += 1.0;  // a constant rate
   in.residuals[0 * kWindows + 40] += 25.0;  // one jump
   const auto tests = misfit_tests(in);
   EXPECT_GT(z_of(tests, "trend", "dyaw"), 5.0);

@@ -5,7 +5,6 @@
 // instead of CLI11's own codes (105-114).
 
 #include <CLI/CLI.hpp>
-
 #include <optional>
 #include <string_view>
 

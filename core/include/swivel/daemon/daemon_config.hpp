@@ -15,10 +15,10 @@ namespace swivel::daemon {
 
 /// One plugin slot: `{plugin: NAME, params: {...}}`. The plugin validates its own params.
 struct PluginConfig {
-  std::string plugin;           ///< plugin name, e.g. "differential"
-  YAML::Node params;            ///< the `params:` mapping (null when absent)
-  std::string params_path;      ///< "drivetrain.params", for messages
-  std::string where;            ///< "swiveld.yaml:14:11: drivetrain.plugin:", for messages
+  std::string plugin;       ///< plugin name, e.g. "differential"
+  YAML::Node params;        ///< the `params:` mapping (null when absent)
+  std::string params_path;  ///< "drivetrain.params", for messages
+  std::string where;        ///< "swiveld.yaml:14:11: drivetrain.plugin:", for messages
 };
 
 /// One step of the built-in motion script: hold `twist` for `duration_s`.
@@ -47,9 +47,9 @@ struct DaemonConfig {
   std::string file;        ///< the configuration file as given
   std::string config_dir;  ///< its directory: base of relative paths
 
-  double rate_hz = 1000.0;   ///< loop.rate_hz
-  int fifo_priority = 80;    ///< loop.fifo_priority (SCHED_FIFO, 1..99)
-  bool realtime = true;      ///< loop.realtime: try SCHED_FIFO, mlockall, cpu_dma_latency
+  double rate_hz = 1000.0;  ///< loop.rate_hz
+  int fifo_priority = 80;   ///< loop.fifo_priority (SCHED_FIFO, 1..99)
+  bool realtime = true;     ///< loop.realtime: try SCHED_FIFO, mlockall, cpu_dma_latency
 
   std::string robot_model_path;  ///< resolved path of robot_model
   RobotModel robot;              ///< the nominal robot model, loaded and validated

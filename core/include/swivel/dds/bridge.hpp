@@ -42,29 +42,29 @@ struct TimingPercentiles {
 /// command counters).
 struct DiagnosticsSample {
   double uptime_s = 0.0;
-  double loop_rate_hz = 0.0;        ///< configured
-  double measured_rate_hz = 0.0;    ///< over the daemon's last window
-  TimingPercentiles lateness;       ///< wake-up lateness, us
-  TimingPercentiles cycle_time;     ///< cycle execution time, us
+  double loop_rate_hz = 0.0;      ///< configured
+  double measured_rate_hz = 0.0;  ///< over the daemon's last window
+  TimingPercentiles lateness;     ///< wake-up lateness, us
+  TimingPercentiles cycle_time;   ///< cycle execution time, us
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
   std::uint64_t fault_count = 0;
   LoopMode mode = LoopMode::kIdle;  ///< the loop's mode (ROS 2 diagnostics level)
   FaultCode fault = FaultCode::kNone;
-  std::string fault_detail;         ///< the active fault's cause ("" when healthy)
+  std::string fault_detail;  ///< the active fault's cause ("" when healthy)
   std::string hardware_plugin;
   std::string drivetrain_plugin;
   std::string localization_plugin;
-  std::uint32_t reload_count = 0;   ///< configuration reloads attempted
+  std::uint32_t reload_count = 0;  ///< configuration reloads attempted
   bool last_reload_ok = true;
-  std::string last_reload_result;   ///< "" before the first reload
-  bool restart_required = false;    ///< a changed setting needs a restart
+  std::string last_reload_result;  ///< "" before the first reload
+  bool restart_required = false;   ///< a changed setting needs a restart
 };
 
 /// A request addressed to this robot (Request topic).
 struct RequestSample {
-  std::string verb;      ///< "reload", "calibrate" or "clear"
-  std::string argument;  ///< verb-specific, "" when none
+  std::string verb;              ///< "reload", "calibrate" or "clear"
+  std::string argument;          ///< verb-specific, "" when none
   std::uint64_t request_id = 0;  ///< echoed in the Reply
 };
 
@@ -87,8 +87,7 @@ struct ReplySample {
 /// Calibrated geometry of one module with one-sigma uncertainties.
 struct ModuleCalibrationSample {
   double x_m = 0.0, y_m = 0.0, delta_rad = 0.0, d_m = 0.0, r_m = 0.0;
-  double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_delta_rad = 0.0, sigma_d_m = 0.0,
-         sigma_r_m = 0.0;
+  double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_delta_rad = 0.0, sigma_d_m = 0.0, sigma_r_m = 0.0;
 };
 
 /// Progress or result of a calibration run (CalibrationResult topic).
@@ -125,12 +124,12 @@ struct DdsCallbacks {
 /// Counters of the bridge's own work, for diagnostics and tests.
 struct BridgeCounters {
   std::uint64_t states_published = 0;
-  std::uint64_t commands_received = 0;   ///< accepted by on_command
-  std::uint64_t commands_dropped = 0;    ///< refused by on_command, or no callback
-  std::uint64_t commands_ignored = 0;    ///< addressed to another robot
-  std::uint64_t commands_stale = 0;      ///< ROS 2 TwistStamped older than cmd_vel_max_age_s
+  std::uint64_t commands_received = 0;  ///< accepted by on_command
+  std::uint64_t commands_dropped = 0;   ///< refused by on_command, or no callback
+  std::uint64_t commands_ignored = 0;   ///< addressed to another robot
+  std::uint64_t commands_stale = 0;     ///< ROS 2 TwistStamped older than cmd_vel_max_age_s
   std::uint64_t motion_captures_received = 0;
-  std::uint64_t requests_received = 0;   ///< Request and SetPose (initialpose included)
+  std::uint64_t requests_received = 0;  ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
   SensorCounters sensors;  ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
 };

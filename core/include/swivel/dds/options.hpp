@@ -42,9 +42,9 @@ inline constexpr double kDefaultMaxAgePeriods = 5.0;
 /// geometry_msgs/PoseWithCovarianceStamped poses from rt/<namespace>/initialpose.
 struct Ros2Options {
   bool enabled = false;
-  std::string ros_namespace;               ///< "" or e.g. "robot1" (no leading/trailing '/')
-  std::string odom_frame_id = "odom";      ///< header.frame_id of the odometry
-  std::string base_frame_id = "base_link"; ///< child_frame_id of the odometry
+  std::string ros_namespace;                ///< "" or e.g. "robot1" (no leading/trailing '/')
+  std::string odom_frame_id = "odom";       ///< header.frame_id of the odometry
+  std::string base_frame_id = "base_link";  ///< child_frame_id of the odometry
   /// Publish odom_frame_id -> base_frame_id on rt/tf (off when another node, e.g.
   /// robot_localization, publishes that transform).
   bool publish_tf = true;
@@ -81,18 +81,18 @@ struct Ros2Options {
 };
 
 struct DdsOptions {
-  std::uint32_t domain_id = 0;      ///< dds.domain_id [0, 232]
+  std::uint32_t domain_id = 0;  ///< dds.domain_id [0, 232]
   /// dds.config: Cyclone configuration file (relative to the configuration file), stored as
   /// a "file://" URI. CYCLONEDDS_URI, when set, overrides it; "" (the default) with
   /// CYCLONEDDS_URI unset: Swivel's loopback-only loopback.xml (see resolve_config()).
   std::string config_uri;
-  double publish_rate_hz = 100.0;   ///< dds.publish_rate_hz: state and module states (1..1000)
-  double diagnostics_rate_hz = 2.0; ///< dds.diagnostics_rate_hz (0.1..100)
-  int history_depth = 1;            ///< dds.history_depth: keep-last depth of writers (1..10)
+  double publish_rate_hz = 100.0;    ///< dds.publish_rate_hz: state and module states (1..1000)
+  double diagnostics_rate_hz = 2.0;  ///< dds.diagnostics_rate_hz (0.1..100)
+  int history_depth = 1;             ///< dds.history_depth: keep-last depth of writers (1..10)
   /// dds.run_samples_rate_hz: run samples on swivel_run_samples (what `swivelctl record`
   /// writes to a run log), 0..1000 and at most the loop rate; 0 or `off`: none.
   double run_samples_rate_hz = 100.0;
-  Ros2Options ros2;                 ///< dds.ros2
+  Ros2Options ros2;  ///< dds.ros2
 };
 
 /// Reads and validates the `dds:` mapping (null or absent: all defaults).

@@ -108,24 +108,26 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
 /// swivel/plugin/abi_fingerprint.hpp). Use once per library:
 ///   SWIVEL_EXPORT_PLUGIN(swivel::plugins::DifferentialDrivetrain, swivel::Drivetrain,
 ///                        "differential")
-#define SWIVEL_EXPORT_PLUGIN(Class, Interface, plugin_name)                                   \
-  extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*           \
-  swivel_plugin_descriptor(void) {                                                          \
-    static const SwivelPluginDescriptor descriptor{                                         \
-        SWIVEL_PLUGIN_ABI_VERSION, ::swivel::PluginKindOf<Interface>::value, plugin_name,   \
-        [](const char** error) -> void* {                                                   \
-          try {                                                                             \
-            return static_cast<Interface*>(new Class());                                    \
-          } catch (const std::exception& e) {                                               \
-            static thread_local std::array<char, 256> message{};                            \
-            (void)std::snprintf(message.data(), message.size(), "%s", e.what());            \
-            if (error != nullptr) *error = message.data();                                  \
-          } catch (...) {                                                                   \
-            if (error != nullptr) *error = "unknown exception in constructor";              \
-          }                                                                                 \
-          return nullptr;                                                                   \
-        },                                                                                  \
-        [](void* instance) { delete static_cast<Interface*>(instance); },                   \
-        ::swivel::abi_fingerprint()};                                                       \
-    return &descriptor;                                                                     \
+#define SWIVEL_EXPORT_PLUGIN(Class, Interface, plugin_name)                       \
+  extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor* \
+  swivel_plugin_descriptor(void) {                                                \
+    static const SwivelPluginDescriptor descriptor{                               \
+        SWIVEL_PLUGIN_ABI_VERSION,                                                \
+        ::swivel::PluginKindOf<Interface>::value,                                 \
+        plugin_name,                                                              \
+        [](const char** error) -> void* {                                         \
+          try {                                                                   \
+            return static_cast<Interface*>(new Class());                          \
+          } catch (const std::exception& e) {                                     \
+            static thread_local std::array<char, 256> message{};                  \
+            (void)std::snprintf(message.data(), message.size(), "%s", e.what());  \
+            if (error != nullptr) *error = message.data();                        \
+          } catch (...) {                                                         \
+            if (error != nullptr) *error = "unknown exception in constructor";    \
+          }                                                                       \
+          return nullptr;                                                         \
+        },                                                                        \
+        [](void* instance) { delete static_cast<Interface*>(instance); },         \
+        ::swivel::abi_fingerprint()};                                             \
+    return &descriptor;                                                           \
   }

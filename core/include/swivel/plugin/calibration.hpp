@@ -46,11 +46,11 @@ inline const char* calibration_phase_name(CalibrationPhase phase) noexcept {
 
 /// Progress of a procedure (trivially copyable).
 struct CalibrationProgress {
-  std::uint32_t module = 0;        ///< 0-based module the current run locks
+  std::uint32_t module = 0;  ///< 0-based module the current run locks
   std::uint32_t module_count = 0;
-  std::uint32_t run = 0;           ///< 0-based run of that module (locked angle index)
+  std::uint32_t run = 0;  ///< 0-based run of that module (locked angle index)
   std::uint32_t runs_per_module = 0;
-  double fraction = 0.0;           ///< of the whole procedure, [0, 1]
+  double fraction = 0.0;  ///< of the whole procedure, [0, 1]
   CalibrationPhase phase = CalibrationPhase::kIdle;
 };
 

@@ -11,12 +11,12 @@
 namespace swivel {
 
 struct PluginContext {
-  YAML::Node params;          ///< the plugin's `params:` mapping (may be null)
-  std::string config_file;    ///< file `params` came from, for messages
-  std::string params_path;    ///< key path of `params`, e.g. "localization.params"
-  std::string config_dir;     ///< base directory for relative paths in params
+  YAML::Node params;                  ///< the plugin's `params:` mapping (may be null)
+  std::string config_file;            ///< file `params` came from, for messages
+  std::string params_path;            ///< key path of `params`, e.g. "localization.params"
+  std::string config_dir;             ///< base directory for relative paths in params
   const RobotModel* robot = nullptr;  ///< nominal robot model (never null when configured)
-  double period_s = 0.001;    ///< loop period
+  double period_s = 0.001;            ///< loop period
 };
 
 }  // namespace swivel

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The real-time loop (docs/architecture.md "One cycle of the loop"). One thread at a fixed period runs:
-// hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
+// The real-time loop (docs/architecture.md "One cycle of the loop"). One thread at a fixed period
+// runs: hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
 // forward -> localization update -> newest velocity command -> motion limits -> drivetrain
 // inverse -> write hardware -> publish a StateSnapshot -> record timing.
 //
@@ -447,22 +447,22 @@ class ControlLoop {
   OdometryMonitor odometry_monitor_;
   TwistWindow twist_window_;
   TwistEstimate twist_estimate_{};
-  motion::TwistLimiter command_limiter_;  // the robot model's limits
-  motion::TwistLimiter stop_limiter_;     // the same, with the stop deceleration
+  motion::TwistLimiter command_limiter_;            // the robot model's limits
+  motion::TwistLimiter stop_limiter_;               // the same, with the stop deceleration
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
   double last_cycle_s_ = 0.0;
   bool has_last_cycle_ = false;
-  bool hardware_paused_ = false;  // the loop's view of hardware_access_
-  bool last_write_zero_ = true;   // the last setpoints written were all zero
-  bool stopping_ = false;         // the controlled stop was taken
-  double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
-  bool clear_pending_ = false;    // a request_clear() taken this cycle
+  bool hardware_paused_ = false;            // the loop's view of hardware_access_
+  bool last_write_zero_ = true;             // the last setpoints written were all zero
+  bool stopping_ = false;                   // the controlled stop was taken
+  double stop_catch_up_s_ = 0.0;            // extra time for the stop's first step (limit())
+  bool clear_pending_ = false;              // a request_clear() taken this cycle
   double run_sample_period_s_ = 0.0;        // 0: no run samples
   double next_run_sample_s_ = 0.0;          // when the next one is due
   std::uint64_t run_sample_sequence_ = 0;   // run samples produced
   MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
   Twist2 run_sample_command_{};             // this cycle's target before the limits
-  GyroSample external_gyro_{};    // newest finite external gyro sample
+  GyroSample external_gyro_{};              // newest finite external gyro sample
   bool has_external_gyro_ = false;
   SensorWatch gyro_watch_;
   SensorWatch motion_capture_watch_;

@@ -60,7 +60,7 @@ class LatestValue {
 
   std::array<Slot, 3> slots_{};
   alignas(kCacheLineBytes) std::atomic<std::uint8_t> middle_{1};
-  alignas(kCacheLineBytes) std::uint8_t back_ = 0;  // producer-owned
+  alignas(kCacheLineBytes) std::uint8_t back_ = 0;   // producer-owned
   alignas(kCacheLineBytes) std::uint8_t front_ = 2;  // consumer-owned
 };
 

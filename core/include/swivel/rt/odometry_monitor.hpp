@@ -44,7 +44,8 @@ class OdometryMonitor {
 
   /// Real-time safe. Feeds one valid odometry increment and the cycle's gyro reading.
   /// Returns which check is tripped (kConsistent while none is).
-  Verdict update(const OdometryIncrement& odometry, bool gyro_valid, double gyro_wz_radps) noexcept {
+  Verdict update(const OdometryIncrement& odometry, bool gyro_valid,
+                 double gyro_wz_radps) noexcept {
     if (!options_.enabled || !odometry.valid || !(odometry.dt_s > 0.0)) return Verdict::kConsistent;
     const double dt_s = odometry.dt_s;
     const double alpha = dt_s / (options_.filter_time_constant_s + dt_s);
@@ -52,9 +53,8 @@ class OdometryMonitor {
       yaw_difference_radps_ +=
           alpha * (odometry.twist.wz_radps - gyro_wz_radps - yaw_difference_radps_);
       gyro_rate_radps_ += alpha * (std::abs(gyro_wz_radps) - gyro_rate_radps_);
-      gyro_above_s_ = std::abs(yaw_difference_radps_) > gyro_limit_radps()
-                          ? gyro_above_s_ + dt_s
-                          : 0.0;
+      gyro_above_s_ =
+          std::abs(yaw_difference_radps_) > gyro_limit_radps() ? gyro_above_s_ + dt_s : 0.0;
     } else {
       // Nothing to compare with: start afresh when the gyro returns.
       yaw_difference_radps_ = 0.0;
@@ -62,7 +62,8 @@ class OdometryMonitor {
       gyro_above_s_ = 0.0;
     }
     residual_mps_ += alpha * (odometry.residual - residual_mps_);
-    residual_above_s_ = residual_mps_ > options_.residual_limit_mps ? residual_above_s_ + dt_s : 0.0;
+    residual_above_s_ =
+        residual_mps_ > options_.residual_limit_mps ? residual_above_s_ + dt_s : 0.0;
 
     if (gyro_above_s_ >= options_.persistence_s) return Verdict::kGyroDisagrees;
     if (residual_above_s_ >= options_.persistence_s) return Verdict::kResidualHigh;
@@ -73,7 +74,8 @@ class OdometryMonitor {
   [[nodiscard]] double yaw_difference_radps() const noexcept { return yaw_difference_radps_; }
   /// The yaw-rate disagreement allowed now, rad/s.
   [[nodiscard]] double gyro_limit_radps() const noexcept {
-    return options_.gyro_disagreement_radps + options_.gyro_disagreement_fraction * gyro_rate_radps_;
+    return options_.gyro_disagreement_radps +
+           options_.gyro_disagreement_fraction * gyro_rate_radps_;
   }
   /// Filtered drivetrain residual, m/s.
   [[nodiscard]] double residual_mps() const noexcept { return residual_mps_; }

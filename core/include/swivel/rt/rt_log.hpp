@@ -22,18 +22,18 @@ enum class LogLevel : std::uint8_t { kDebug, kInfo, kWarn, kError };
 
 /// What happened. The values a..d of a record mean what the code says.
 enum class LogCode : std::uint16_t {
-  kFaultRaised,            ///< a = FaultCode, b = fault count, c/d = measured value and its
-                           ///< limit (0 when none); detail = cause
-  kFaultCleared,           ///< a = the FaultCode that was cleared
-  kCommandRejected,        ///< a = sequence; non-finite velocity command
-  kMotionCaptureRejected,  ///< a = sample stamp, s; non-finite motion-capture sample
-  kLocalizationSwapped,    ///< a = swap count, b..d = pose handed over (x, y, yaw)
-  kZeroSetpointFallback,   ///< inverse kinematics failed or was non-finite: raw zeros written
-  kMessage,                ///< free text only
+  kFaultRaised,              ///< a = FaultCode, b = fault count, c/d = measured value and its
+                             ///< limit (0 when none); detail = cause
+  kFaultCleared,             ///< a = the FaultCode that was cleared
+  kCommandRejected,          ///< a = sequence; non-finite velocity command
+  kMotionCaptureRejected,    ///< a = sample stamp, s; non-finite motion-capture sample
+  kLocalizationSwapped,      ///< a = swap count, b..d = pose handed over (x, y, yaw)
+  kZeroSetpointFallback,     ///< inverse kinematics failed or was non-finite: raw zeros written
+  kMessage,                  ///< free text only
   kLocalizationSwapRefused,  ///< the incoming localization's hand_over failed; detail = why
-  kPoseSet,                ///< a = request id, b..d = pose set (x, y, yaw)
-  kPoseRefused,            ///< a = request id; detail = the localization's reason
-  kClearRefused,           ///< a = FaultCode that persists, b = request id; detail = cause
+  kPoseSet,                  ///< a = request id, b..d = pose set (x, y, yaw)
+  kPoseRefused,              ///< a = request id; detail = the localization's reason
+  kClearRefused,             ///< a = FaultCode that persists, b = request id; detail = cause
 };
 
 /// "fault_raised", ... for messages.

@@ -67,11 +67,11 @@ using FaultDetail = std::array<char, 64>;
 /// The loop's state at the end of one cycle.
 struct StateSnapshot {
   std::uint64_t cycle = 0;
-  double stamp_s = 0.0;          ///< monotonic time of the cycle's reading
+  double stamp_s = 0.0;  ///< monotonic time of the cycle's reading
   /// stamp_s in ROS time: CLOCK_REALTIME (Unix time), ns, through the loop's measured
   /// offset of the realtime clock from the monotonic one (rt::ClockOffset).
   std::int64_t ros_stamp_ns = 0;
-  PoseEstimate estimate;         ///< localization output, world frame
+  PoseEstimate estimate;  ///< localization output, world frame
   /// Body twist from the encoders (the drivetrain's forward kinematics over the loop's
   /// twist window, see TwistWindow), robot frame; it refers to half the window before
   /// stamp_s.
@@ -80,18 +80,18 @@ struct StateSnapshot {
   /// wz): m^2/s^2, m rad/s^2, rad^2/s^2.
   std::array<double, 9> twist_covariance{};
   bool has_twist_covariance = false;
-  Twist2 command_twist;          ///< twist applied this cycle after limits, robot frame
+  Twist2 command_twist;  ///< twist applied this cycle after limits, robot frame
   double odometry_residual = 0.0;
   double gyro_wz_radps = 0.0;
   std::uint32_t module_count = 0;
   std::array<ModuleState, kMaxModules> modules{};
   LoopMode mode = LoopMode::kIdle;
-  FaultCode fault = FaultCode::kNone;     ///< active fault (kNone when healthy)
-  FaultDetail fault_detail{};             ///< the active fault's cause ("" when healthy)
-  std::uint64_t fault_count = 0;          ///< faults raised since start
-  ShortName localization_plugin{};        ///< active localization plugin
-  std::uint64_t localization_swaps = 0;   ///< hot swaps taken by the loop
-  bool has_truth = false;                 ///< simulation: the true pose is known
+  FaultCode fault = FaultCode::kNone;    ///< active fault (kNone when healthy)
+  FaultDetail fault_detail{};            ///< the active fault's cause ("" when healthy)
+  std::uint64_t fault_count = 0;         ///< faults raised since start
+  ShortName localization_plugin{};       ///< active localization plugin
+  std::uint64_t localization_swaps = 0;  ///< hot swaps taken by the loop
+  bool has_truth = false;                ///< simulation: the true pose is known
   Pose2 truth;
   /// The cycle's raw hardware reading (for run logs): cumulative encoder angles, rad, and
   /// measured steering angles, rad, per module.

@@ -17,9 +17,9 @@ namespace swivel::rt {
 class LatencyHistogram {
  public:
   static constexpr std::int64_t kBucketWidthNs = 1000;  ///< of the linear buckets
-  static constexpr std::size_t kLinearBuckets = 2048;    ///< [0, 2.048 ms) in 1 us steps
-  static constexpr std::size_t kSubBuckets = 64;         ///< per doubling above that
-  static constexpr std::size_t kDoublings = 13;          ///< 2.048 ms * 2^13 = 16.8 s
+  static constexpr std::size_t kLinearBuckets = 2048;   ///< [0, 2.048 ms) in 1 us steps
+  static constexpr std::size_t kSubBuckets = 64;        ///< per doubling above that
+  static constexpr std::size_t kDoublings = 13;         ///< 2.048 ms * 2^13 = 16.8 s
   static constexpr std::size_t kBucketCount =
       kLinearBuckets + kDoublings * kSubBuckets;  ///< regular buckets; one more overflows
 

@@ -42,9 +42,10 @@ double parse_number(const std::string& text, const std::string& where) {
 }  // namespace
 
 std::string calibration_comment(const LockSpec& lock, double yaw_rate_radps) {
-  std::string line = std::string(kCommentPrefix) + " locked_module " +
-                     std::to_string(lock.locked_module + 1);
-  if (lock.declared_steer_rad) line += ", locked_steer_rad " + format_number(*lock.declared_steer_rad);
+  std::string line =
+      std::string(kCommentPrefix) + " locked_module " + std::to_string(lock.locked_module + 1);
+  if (lock.declared_steer_rad)
+    line += ", locked_steer_rad " + format_number(*lock.declared_steer_rad);
   line += ", yaw_rate_radps " + format_number(yaw_rate_radps);
   return line;
 }

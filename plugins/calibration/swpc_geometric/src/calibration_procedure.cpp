@@ -15,12 +15,8 @@ double wrap_angle(double angle_rad) noexcept {
   return std::remainder(angle_rad, 2.0 * std::numbers::pi);
 }
 
-bool positive(double v) {
-  return std::isfinite(v) && v > 0.0;
-}
-bool non_negative(double v) {
-  return std::isfinite(v) && v >= 0.0;
-}
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
 void check_options(const ProcedureOptions& o) {
   const auto require = [](bool ok, const char* option, const char* what) {

@@ -86,8 +86,9 @@ TEST(CalibrationIoTest, DeclaredAngleFarFromTheEncoderIsRejected) {
 
 TEST(CalibrationIoTest, ModuleOutOfRangeAndDifferentRobotsAreRejected) {
   const RunLog log = make_log(1, 0.8, "");
-  EXPECT_NE(message_of([&] { locked_run_from_log(log, {3, std::nullopt}); })
-                .find("locked module 4 but the robot has 3 modules"),
+  EXPECT_NE(message_of([&] {
+              locked_run_from_log(log, {3, std::nullopt});
+            }).find("locked module 4 but the robot has 3 modules"),
             std::string::npos);
   RunLog other = make_log(0, 0.8, "");
   other.header.robot = "quad";

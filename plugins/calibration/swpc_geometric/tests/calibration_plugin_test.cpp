@@ -6,10 +6,9 @@
 // writing the calibrated model.
 
 #include <gtest/gtest.h>
-
-#include <cmath>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -139,8 +138,8 @@ class CalibrationRig {
     rt::LoopOptions options;
     options.realtime = false;
     options.rate_hz = 1.0 / kPeriodS;
-    loop_ = std::make_unique<rt::ControlLoop>(options, *hardware_, *drivetrain_, localization_,
-                                              "none");
+    loop_ =
+        std::make_unique<rt::ControlLoop>(options, *hardware_, *drivetrain_, localization_, "none");
     PluginContext cal;
     cal.period_s = kPeriodS;
     cal.config_file = ctx.config_file;
@@ -196,7 +195,8 @@ class CalibrationRig {
   }
   [[nodiscard]] bool setpoints_zero() const {
     for (std::uint32_t i = 0; i < hardware_->last.module_count; ++i) {
-      if (hardware_->last.wheel_rate_radps[i] != 0.0 || hardware_->last.steer_rate_radps[i] != 0.0 ||
+      if (hardware_->last.wheel_rate_radps[i] != 0.0 ||
+          hardware_->last.steer_rate_radps[i] != 0.0 ||
           hardware_->last.mode[i] != ModuleDriveMode::kVelocity) {
         return false;
       }
@@ -262,12 +262,13 @@ TEST(SwpcGeometricPlugin, RecoversTrueParametersOfTheSimulatedRobot) {
     const SwpcModuleParams& got = calibrated.modules[i];
     const SwpcModuleParams& want = rig.truth_.modules[i];
     SCOPED_TRACE("module " + std::to_string(i + 1));
-    std::printf("module %zu: x %.3f/%.3f mm, y %.3f/%.3f mm, delta %.3f/%.3f deg, d %.3f/%.3f mm, "
-                "r %.3f/%.3f mm (recovered/true)\n",
-                i + 1, got.x_m * 1e3, want.x_m * 1e3, got.y_m * 1e3, want.y_m * 1e3,
-                got.steering_offset_rad / kDegToRad, want.steering_offset_rad / kDegToRad,
-                got.caster_offset_m * 1e3, want.caster_offset_m * 1e3, got.wheel_radius_m * 1e3,
-                want.wheel_radius_m * 1e3);
+    std::printf(
+        "module %zu: x %.3f/%.3f mm, y %.3f/%.3f mm, delta %.3f/%.3f deg, d %.3f/%.3f mm, "
+        "r %.3f/%.3f mm (recovered/true)\n",
+        i + 1, got.x_m * 1e3, want.x_m * 1e3, got.y_m * 1e3, want.y_m * 1e3,
+        got.steering_offset_rad / kDegToRad, want.steering_offset_rad / kDegToRad,
+        got.caster_offset_m * 1e3, want.caster_offset_m * 1e3, got.wheel_radius_m * 1e3,
+        want.wheel_radius_m * 1e3);
     std::printf("  sigma: x %.3f mm, y %.3f mm, delta %.3f deg, d %.3f mm, r %.3f mm\n",
                 result.modules[i].sigma_x_m * 1e3, result.modules[i].sigma_y_m * 1e3,
                 result.modules[i].sigma_delta_rad / kDegToRad, result.modules[i].sigma_d_m * 1e3,
@@ -373,13 +374,18 @@ TEST(SwpcGeometricPlugin, RefusesAPlanAWheelCannotFollowNamingTheParameter) {
 }
 
 TEST(CalibratedModelPath, NeverNamesAnExistingFile) {
-  const fs::path dir = fs::temp_directory_path() / ("swivel-cal-path-" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("swivel-cal-path-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::time_t now = 1700000000;
   const std::string first = daemon::calibrated_model_path((dir / "swpc4.yaml").string(), now);
   EXPECT_EQ(fs::path(first).parent_path(), dir);
   EXPECT_EQ(fs::path(first).filename().string().rfind("swpc4.calibrated-", 0), 0U) << first;
-  { std::FILE* f = std::fopen(first.c_str(), "w"); ASSERT_NE(f, nullptr); std::fclose(f); }
+  {
+    std::FILE* f = std::fopen(first.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fclose(f);
+  }
   const std::string second = daemon::calibrated_model_path((dir / "swpc4.yaml").string(), now);
   EXPECT_NE(first, second);
   EXPECT_NE(second.find("-2.yaml"), std::string::npos) << second;

@@ -45,8 +45,8 @@ Errors worst_errors(const CalibrationResult& result, const RobotModel& truth) {
     const SwpcModuleParams& est = result.modules[i].params;
     const SwpcModuleParams& tru = truth.modules[i];
     e.position_m = std::max(e.position_m, std::hypot(est.x_m - tru.x_m, est.y_m - tru.y_m));
-    e.delta_rad = std::max(e.delta_rad,
-                           std::abs(wrap_pi(est.steering_offset_rad - tru.steering_offset_rad)));
+    e.delta_rad =
+        std::max(e.delta_rad, std::abs(wrap_pi(est.steering_offset_rad - tru.steering_offset_rad)));
     e.d_m = std::max(e.d_m, std::abs(est.caster_offset_m - tru.caster_offset_m));
     e.r_m = std::max(e.r_m, std::abs(est.wheel_radius_m - tru.wheel_radius_m));
   }
@@ -62,7 +62,8 @@ RobotModel ideal_sensors(RobotModel truth) {
 
 TEST(SimulatedProcedureTest, RecordsTwoFullRunsPerModuleAsTheDaemonDoes) {
   const SimulatedProcedureOptions options;  // the daemon's defaults
-  const SimulatedCalibration sc = run_simulated_calibration(design_robot(), table4_robot(), options);
+  const SimulatedCalibration sc =
+      run_simulated_calibration(design_robot(), table4_robot(), options);
 
   ASSERT_TRUE(sc.result.ok()) << sc.result.verdict.text();
   ASSERT_EQ(sc.input.runs.size(), 8U);

@@ -149,8 +149,8 @@ void run(const Settings& s) {
         "6.7818e-15");
     row("delta [deg]", r.mae_steering_offset_rad, &TrialErrors::steering_offset_rad, 1.0 / kDeg,
         r.max_steering_offset_rad, "2.7289e-16");
-    row("d [mm]", r.mae_caster_offset_m, &TrialErrors::caster_offset_m, 1e3,
-        r.max_caster_offset_m, "7.1324e-15");
+    row("d [mm]", r.mae_caster_offset_m, &TrialErrors::caster_offset_m, 1e3, r.max_caster_offset_m,
+        "7.1324e-15");
     row("r [mm]", r.mae_wheel_radius_m, &TrialErrors::wheel_radius_m, 1e3, r.max_wheel_radius_m,
         "1.0411e-13");
     std::printf("  refused: %zu of %zu trials%s%s\n", r.refused, r.trials,

@@ -69,8 +69,7 @@ void DifferentialDrivetrain::configure(const DifferentialParams& geometry,
   configured_ = true;
 }
 
-Status DifferentialDrivetrain::forward(const HardwareState& previous,
-                                       const HardwareState& current,
+Status DifferentialDrivetrain::forward(const HardwareState& previous, const HardwareState& current,
                                        OdometryIncrement& out) noexcept {
   out = OdometryIncrement{};
   if (!configured_) return fail("differential: not configured");
@@ -100,9 +99,8 @@ Status DifferentialDrivetrain::forward(const HardwareState& previous,
   const Pose2 delta = differential::forward_increment(geometry_, dpsi_left_rad, dpsi_right_rad);
   // The constant twist that moves the robot along exactly this arc in dt: forward speed is
   // the arc length (not the chord) over dt.
-  const double arc_m =
-      0.5 * (geometry_.wheel_radius_left_m * dpsi_left_rad +
-             geometry_.wheel_radius_right_m * dpsi_right_rad);
+  const double arc_m = 0.5 * (geometry_.wheel_radius_left_m * dpsi_left_rad +
+                              geometry_.wheel_radius_right_m * dpsi_right_rad);
   out.dt_s = dt_s;
   out.delta = delta;
   out.twist = Twist2{arc_m / dt_s, 0.0, delta.yaw_rad / dt_s};
@@ -129,8 +127,8 @@ Status DifferentialDrivetrain::inverse(const Twist2& command, const HardwareStat
   }
   if (!std::isfinite(dt_s) || dt_s < 0.0) return fail("differential: invalid cycle period");
 
-  const double scale = differential::wheel_limit_scale(geometry_, command.vx_mps,
-                                                       command.wz_radps, max_wheel_rate_radps_);
+  const double scale = differential::wheel_limit_scale(geometry_, command.vx_mps, command.wz_radps,
+                                                       max_wheel_rate_radps_);
   applied = Twist2{command.vx_mps * scale, 0.0, command.wz_radps * scale};
   const differential::WheelRates rates =
       differential::inverse(geometry_, applied.vx_mps, applied.wz_radps);

@@ -77,7 +77,7 @@ TEST(DifferentialDrivetrain, InverseScalesTwistToKeepCurvature) {
             Status::kOk);
   EXPECT_EQ(cmd.module_count, 2U);
   EXPECT_EQ(cmd.mode[0], ModuleDriveMode::kVelocity);
-  EXPECT_NEAR(cmd.wheel_rate_radps[1], 20.0, 1e-12);  // the faster wheel at its limit
+  EXPECT_NEAR(cmd.wheel_rate_radps[1], 20.0, 1e-12);           // the faster wheel at its limit
   EXPECT_NEAR(applied.wz_radps / applied.vx_mps, 0.5, 1e-12);  // curvature kept
   EXPECT_EQ(applied.vy_mps, 0.0);  // non-holonomic: lateral command dropped
   EXPECT_NEAR(cmd.wheel_rate_radps[0], (applied.vx_mps - 0.2 * applied.wz_radps) / 0.075, 1e-12);

@@ -16,9 +16,7 @@
 namespace swivel::plugins {
 namespace {
 
-bool finite(double v) noexcept {
-  return std::isfinite(v);
-}
+bool finite(double v) noexcept { return std::isfinite(v); }
 
 // "swpc: module <i> <what>" for every module index, built at compile time so that forward()
 // can name the module with a static text.

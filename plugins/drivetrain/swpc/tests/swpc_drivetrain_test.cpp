@@ -41,9 +41,7 @@ std::vector<SwpcModuleParams> offset_modules() {
   return modules;
 }
 
-double wrap(double a) {
-  return std::remainder(a, 2.0 * kPi);
-}
+double wrap(double a) { return std::remainder(a, 2.0 * kPi); }
 
 // A caster robot moving with a prescribed body twist: the casters follow the no-slip law
 // phi_dot = (n . v_s)/d - w, the wheels roll r psi_dot = u . v_s (RK4, 10 substeps per
@@ -435,8 +433,7 @@ TEST(SwpcDrivetrain, ImplausibleIncrementsAreRejectedNamingTheModule) {
   current.wheel_angle_rad[2] = 0.0;
   current.steer_angle_rad[1] = 0.2 - 0.05;
   EXPECT_EQ(drivetrain.forward(previous, current, inc), Status::kError);
-  EXPECT_STREQ(drivetrain.last_error(),
-               "swpc: module 1 steering rate implausible (encoder jump)");
+  EXPECT_STREQ(drivetrain.last_error(), "swpc: module 1 steering rate implausible (encoder jump)");
 }
 
 TEST(SwpcDrivetrain, ModuleStatesReportCommandedAndMeasuredValues) {

@@ -32,8 +32,7 @@ BusResult Bus::receive(std::uint8_t id, double deadline_s) noexcept {
   for (;;) {
     while (rx_begin_ < rx_end_) {
       std::size_t used = 0;
-      const Parser::Result r =
-          parser_.feed({rx_.data() + rx_begin_, rx_end_ - rx_begin_}, used);
+      const Parser::Result r = parser_.feed({rx_.data() + rx_begin_, rx_end_ - rx_begin_}, used);
       rx_begin_ += used;
       if (r == Parser::Result::kCrcError) {
         ++crc_errors_;
@@ -89,16 +88,14 @@ BusResult Bus::write(std::uint8_t id, std::uint16_t address, std::span<const std
   return r;
 }
 
-bool Bus::sync_write(std::uint16_t address, std::uint16_t length,
-                     std::span<const std::uint8_t> ids,
+bool Bus::sync_write(std::uint16_t address, std::uint16_t length, std::span<const std::uint8_t> ids,
                      std::span<const std::uint8_t> data) noexcept {
   PacketBuilder b(kBroadcastId, Instruction::kSyncWrite);
   return send(build_sync_write(b, address, length, ids, data)) == BusResult::kOk;
 }
 
-bool Bus::sync_read(std::uint16_t address, std::uint16_t length,
-                    std::span<const std::uint8_t> ids, std::span<SyncReply> out,
-                    double timeout_s) noexcept {
+bool Bus::sync_read(std::uint16_t address, std::uint16_t length, std::span<const std::uint8_t> ids,
+                    std::span<SyncReply> out, double timeout_s) noexcept {
   for (std::size_t i = 0; i < ids.size(); ++i) out[i] = SyncReply{};
   if (length > SyncReply::kMaxData || out.size() < ids.size()) return false;
   PacketBuilder b(kBroadcastId, Instruction::kSyncRead);
@@ -108,12 +105,12 @@ bool Bus::sync_read(std::uint16_t address, std::uint16_t length,
   while (pending > 0) {
     while (rx_begin_ < rx_end_ && pending > 0) {
       std::size_t used = 0;
-      const Parser::Result r =
-          parser_.feed({rx_.data() + rx_begin_, rx_end_ - rx_begin_}, used);
+      const Parser::Result r = parser_.feed({rx_.data() + rx_begin_, rx_end_ - rx_begin_}, used);
       rx_begin_ += used;
       if (r != Parser::Result::kPacket && r != Parser::Result::kCrcError) continue;
       if (r == Parser::Result::kCrcError) ++crc_errors_;
-      const std::uint8_t id = r == Parser::Result::kPacket ? parser_.packet().id : parser_.last_id();
+      const std::uint8_t id =
+          r == Parser::Result::kPacket ? parser_.packet().id : parser_.last_id();
       const auto it = std::find(ids.begin(), ids.end(), id);
       if (it == ids.end()) continue;
       SyncReply& reply = out[static_cast<std::size_t>(it - ids.begin())];

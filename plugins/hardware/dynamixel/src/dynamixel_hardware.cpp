@@ -120,8 +120,8 @@ void DynamixelHardware::configure(const PluginContext& ctx) {
   servos_ = std::move(servos);
   module_count_ = modules;
   loop_period_s_ = ctx.period_s > 0.0 ? ctx.period_s : 0.001;
-  stale_cycles_ = static_cast<std::uint32_t>(
-      std::max(1.0, std::ceil(stale_timeout_s_ / loop_period_s_)));
+  stale_cycles_ =
+      static_cast<std::uint32_t>(std::max(1.0, std::ceil(stale_timeout_s_ / loop_period_s_)));
   wheel_ids_.clear();
   steer_ids_.clear();
   all_ids_.clear();
@@ -209,17 +209,15 @@ bool DynamixelHardware::setup_servo(dxl::Bus& bus, std::size_t i) {
   };
   dxl::BusResult r = bus.ping(s.id, kSetupTimeout_s, error);
   if (r != dxl::BusResult::kOk) {
-    return fail(r == dxl::BusResult::kTimeout ? "does not answer a ping"
-                                              : dxl::bus_result_text(r));
+    return fail(r == dxl::BusResult::kTimeout ? "does not answer a ping" : dxl::bus_result_text(r));
   }
   if ((error & dxl::kAlertBit) != 0) {
     std::uint8_t bits[1] = {};
     if (bus.read(s.id, dxl::address::kHardwareErrorStatus, bits, kSetupTimeout_s, error) ==
             dxl::BusResult::kOk &&
         bits[0] != 0) {
-      const std::string text =
-          std::string("hardware error: ") + dxl::hardware_error_text(bits[0]) +
-          " (power-cycle or reboot the servo)";
+      const std::string text = std::string("hardware error: ") + dxl::hardware_error_text(bits[0]) +
+                               " (power-cycle or reboot the servo)";
       return fail(text.c_str());
     }
   }
@@ -263,17 +261,15 @@ Status DynamixelHardware::activate() {
   // Goals before the torque: wheels still, steering where it is.
   std::array<std::uint8_t, 4 * kMaxServos> data{};
   for (std::size_t k = 0; k < wheel_index_.size(); ++k) dxl::put_u32(&data[4 * k], 0);
-  bool sent = wheel_ids_.empty() ||
-              bus.sync_write(dxl::address::kGoalVelocity, 4, wheel_ids_,
-                             {data.data(), 4 * wheel_ids_.size()});
+  bool sent = wheel_ids_.empty() || bus.sync_write(dxl::address::kGoalVelocity, 4, wheel_ids_,
+                                                   {data.data(), 4 * wheel_ids_.size()});
   for (std::size_t k = 0; k < steer_index_.size(); ++k) {
     const std::size_t i = steer_index_[k];
     dxl::put_u32(&data[4 * k], static_cast<std::uint32_t>(reading_.position[i]));
     start_steer_rad_[servos_[i].module] = output_angle(i, reading_.position[i]);
   }
-  sent = sent && (steer_ids_.empty() ||
-                  bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
-                                 {data.data(), 4 * steer_ids_.size()}));
+  sent = sent && (steer_ids_.empty() || bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
+                                                       {data.data(), 4 * steer_ids_.size()}));
   if (!sent) {
     activate_error_ = "dynamixel: cannot write to " + port_path_;
     last_error_ = activate_error_.c_str();
@@ -319,7 +315,8 @@ Status DynamixelHardware::deactivate() {
   dxl::Bus bus(port_);
   std::array<std::uint8_t, 4 * kMaxServos> zero{};
   if (!wheel_ids_.empty()) {
-    bus.sync_write(dxl::address::kGoalVelocity, 4, wheel_ids_, {zero.data(), 4 * wheel_ids_.size()});
+    bus.sync_write(dxl::address::kGoalVelocity, 4, wheel_ids_,
+                   {zero.data(), 4 * wheel_ids_.size()});
   }
   bus.sync_write(dxl::address::kTorqueEnable, 1, all_ids_, {zero.data(), all_ids_.size()});
   // Confirm with each servo; one that does not answer is named.
@@ -402,8 +399,8 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
         if ((reply.error & dxl::kAlertBit) != 0) {
           std::uint8_t status[1] = {};
           std::uint8_t error = 0;
-          const dxl::BusResult hr = bus.read(ids[i], dxl::address::kHardwareErrorStatus, status,
-                                             reply_timeout_s_, error);
+          const dxl::BusResult hr =
+              bus.read(ids[i], dxl::address::kHardwareErrorStatus, status, reply_timeout_s_, error);
           if (hr == dxl::BusResult::kOk && status[0] != 0) {
             fault = FaultKind::kHardwareError;
             bits = status[0];
@@ -476,7 +473,8 @@ Status DynamixelHardware::write(const ActuatorCommand& command) noexcept {
     return Status::kError;
   }
   for (std::uint32_t m = 0; m < command.module_count; ++m) {
-    if (!std::isfinite(command.wheel_rate_radps[m]) || !std::isfinite(command.steer_rate_radps[m])) {
+    if (!std::isfinite(command.wheel_rate_radps[m]) ||
+        !std::isfinite(command.steer_rate_radps[m])) {
       last_error_ = "dynamixel: non-finite actuator setpoint";
       return Status::kError;
     }

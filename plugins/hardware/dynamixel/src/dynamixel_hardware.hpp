@@ -49,12 +49,12 @@ class DynamixelHardware final : public Hardware {
 
   struct Servo {
     std::uint8_t id = 0;
-    bool steering = false;        ///< extended position mode; else a wheel in velocity mode
+    bool steering = false;  ///< extended position mode; else a wheel in velocity mode
     std::uint32_t module = 0;
-    double direction = 1.0;       ///< +1 or -1: servo positive = output positive
-    double gear_ratio = 1.0;      ///< servo revolutions per output revolution
+    double direction = 1.0;        ///< +1 or -1: servo positive = output positive
+    double gear_ratio = 1.0;       ///< servo revolutions per output revolution
     double zero_offset_rad = 0.0;  ///< output angle = servo angle / ratio - offset
-    std::string name;             ///< "left wheel", "wheel 2", "steer 2"
+    std::string name;              ///< "left wheel", "wheel 2", "steer 2"
   };
 
   /// What the bus thread publishes once per bus cycle.
@@ -114,7 +114,7 @@ class DynamixelHardware final : public Hardware {
   std::uint32_t module_count_ = 0;
   std::vector<Servo> servos_;
   std::vector<std::uint8_t> wheel_ids_, steer_ids_, all_ids_;
-  std::vector<std::size_t> wheel_index_, steer_index_;  // into servos_
+  std::vector<std::size_t> wheel_index_, steer_index_;   // into servos_
   std::array<std::int32_t, kMaxModules> wheel_servo_{};  // module -> servo index, -1 none
   std::array<std::int32_t, kMaxModules> steer_servo_{};
   // Messages, built by configure(): [servo][kind] and [servo][hardware text].
@@ -128,8 +128,8 @@ class DynamixelHardware final : public Hardware {
   std::atomic<bool> stop_{false};
   std::atomic<bool> hold_{false};  // on_error(): zero goals until re-activated
   std::atomic<std::uint64_t> bus_cycles_{0};
-  rt::LatestValue<ActuatorCommand> commands_;  // loop -> bus thread
-  rt::LatestValue<Reading> readings_;          // bus thread -> loop
+  rt::LatestValue<ActuatorCommand> commands_;          // loop -> bus thread
+  rt::LatestValue<Reading> readings_;                  // bus thread -> loop
   std::array<double, kMaxModules> start_steer_rad_{};  // steering at activation
 
   // Loop side.

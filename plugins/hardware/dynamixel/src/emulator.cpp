@@ -4,8 +4,8 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <pthread.h>
-#include <sched.h>
 #include <pty.h>
+#include <sched.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -291,23 +291,23 @@ void Emulator::handle(const Packet& request, std::size_t request_bytes, double r
         reply(request.id, *s, 0, data, 3, request_bytes, received_s);
       } else if (instruction == Instruction::kRead) {
         if (params.size() != 4) {
-          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataLengthError),
-                nullptr, 0, request_bytes, received_s);
+          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataLengthError), nullptr,
+                0, request_bytes, received_s);
           return;
         }
         const std::uint16_t address = get_u16(params, 0);
         const std::uint16_t length = get_u16(params, 2);
         if (address + length > s->table.size()) {
-          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataRangeError), nullptr,
-                0, request_bytes, received_s);
+          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataRangeError), nullptr, 0,
+                request_bytes, received_s);
           return;
         }
         const std::array<std::uint8_t, 256> copy = s->table;
         reply(request.id, *s, 0, copy.data() + address, length, request_bytes, received_s);
       } else {
         if (params.size() < 3) {
-          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataLengthError),
-                nullptr, 0, request_bytes, received_s);
+          reply(request.id, *s, static_cast<std::uint8_t>(ErrorNumber::kDataLengthError), nullptr,
+                0, request_bytes, received_s);
           return;
         }
         write_table(request.id, *s, get_u16(params, 0), params.data() + 2, params.size() - 2,
@@ -341,8 +341,7 @@ void Emulator::handle(const Packet& request, std::size_t request_bytes, double r
       }
       return;
     }
-    case Instruction::kStatus:
-      return;
+    case Instruction::kStatus: return;
   }
   // Unknown instruction: the addressed servo says so.
   if (Servo* s = find(request.id)) {

@@ -157,8 +157,8 @@ Parser::Result Parser::feed(std::span<const std::uint8_t> data, std::size_t& con
     }
     buffer_[size_++] = byte;
     if (size_ == kHeaderBytes) {
-      const std::size_t length = static_cast<std::size_t>(buffer_[5]) |
-                                 (static_cast<std::size_t>(buffer_[6]) << 8);
+      const std::size_t length =
+          static_cast<std::size_t>(buffer_[5]) | (static_cast<std::size_t>(buffer_[6]) << 8);
       if (length < 3 || kHeaderBytes + length > buffer_.size()) {
         size_ = 0;
         return Result::kBadLength;
@@ -175,8 +175,7 @@ Parser::Result Parser::finish_packet() noexcept {
   last_id_ = buffer_[4];
   const std::size_t crc_at = expected_ - 2;
   const std::uint16_t crc = crc16({buffer_.data(), crc_at});
-  const auto received =
-      static_cast<std::uint16_t>(buffer_[crc_at] | (buffer_[crc_at + 1] << 8));
+  const auto received = static_cast<std::uint16_t>(buffer_[crc_at] | (buffer_[crc_at + 1] << 8));
   if (crc != received) return Result::kCrcError;
   packet_.id = buffer_[4];
   packet_.instruction = buffer_[kHeaderBytes];

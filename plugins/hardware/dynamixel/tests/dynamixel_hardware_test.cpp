@@ -3,6 +3,8 @@
 // driving both robot kinds, each fault stopping the robot with the servo named, torque off
 // on deactivate, and read()/write() free of heap use.
 
+#include "dynamixel_hardware.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -14,7 +16,6 @@
 #include <thread>
 
 #include "alloc_guard.hpp"
-#include "dynamixel_hardware.hpp"
 #include "swivel/clock.hpp"
 #include "swivel/config/config_error.hpp"
 #include "swivel/dynamixel/bus.hpp"
@@ -109,9 +110,9 @@ TEST(DynamixelHardware, RefusesBadParametersNamingTheKey) {
   EXPECT_NE(message("{left: {id: 1}, right: {id: 2}}").find("port"), std::string::npos);
   EXPECT_NE(message("{port: /dev/null, left: {id: 1}, right: {id: 1}}").find("used twice"),
             std::string::npos);
-  EXPECT_NE(message("{port: /dev/null, left: {id: 1, direction: 0}, right: {id: 2}}")
-                .find("direction"),
-            std::string::npos);
+  EXPECT_NE(
+      message("{port: /dev/null, left: {id: 1, direction: 0}, right: {id: 2}}").find("direction"),
+      std::string::npos);
   EXPECT_NE(message("{port: /dev/null, left: {id: 1, zero_offset_rad: 1}, right: {id: 2}}")
                 .find("only to steering"),
             std::string::npos);
@@ -144,9 +145,9 @@ TEST(DynamixelHardware, EveryFaultMessageFitsTheLoopsFaultDetail) {
   EXPECT_STREQ(hw.message(DynamixelHardware::FaultKind::kSilent, 30, 0),
                "dynamixel ID 251 (wheel 15): no status packet in time");
   for (std::size_t i = 0; i < hw.servos().size(); ++i) {
-    for (const auto kind : {DynamixelHardware::FaultKind::kSilent,
-                            DynamixelHardware::FaultKind::kCrcRun,
-                            DynamixelHardware::FaultKind::kStatusError}) {
+    for (const auto kind :
+         {DynamixelHardware::FaultKind::kSilent, DynamixelHardware::FaultKind::kCrcRun,
+          DynamixelHardware::FaultKind::kStatusError}) {
       EXPECT_LE(std::strlen(hw.message(kind, i, 0)), 63U) << hw.message(kind, i, 0);
     }
     for (unsigned bit = 0; bit < 8; ++bit) {
@@ -163,8 +164,7 @@ TEST(DynamixelHardware, ActivationNamesAMissingServoOrPort) {
   DynamixelHardware hw;
   configure(hw, model, diff_params(emulator.port()));
   EXPECT_EQ(hw.activate(), Status::kError);
-  EXPECT_STREQ(hw.last_error(),
-               "dynamixel ID 2 (right wheel): does not answer a ping");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): does not answer a ping");
   DynamixelHardware no_port;
   configure(no_port, model, diff_params("/nonexistent/ttyUSB9"));
   EXPECT_EQ(no_port.activate(), Status::kError);
@@ -253,7 +253,8 @@ TEST(DynamixelHardware, SwpcSteersInExtendedPositionAndDrivesWheels) {
   c.mode[0] = ModuleDriveMode::kFreeSteer;
   EXPECT_EQ(hw.write(c), Status::kError);
   ASSERT_EQ(hw.deactivate(), Status::kOk);
-  for (const std::uint8_t id : std::vector<std::uint8_t>{1, 11, 2, 12, 3, 13, 4, 14}) EXPECT_EQ(emulator.torque_enable(id), 0);
+  for (const std::uint8_t id : std::vector<std::uint8_t>{1, 11, 2, 12, 3, 13, 4, 14})
+    EXPECT_EQ(emulator.torque_enable(id), 0);
 }
 
 TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
@@ -267,8 +268,7 @@ TEST(DynamixelHardware, SilentServoStopsTheRobotNamingItAndAClearRecovers) {
   EXPECT_NE(emulator.goal_velocity(1), 0);
   emulator.set_silent(2, true);
   ASSERT_EQ(run(hw, wheels(3.0, 3.0), 3.0, s), Status::kError);
-  EXPECT_STREQ(hw.last_error(),
-               "dynamixel ID 2 (right wheel): no status packet in time");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): no status packet in time");
   hw.on_error(hw.last_error());
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   EXPECT_EQ(emulator.goal_velocity(1), 0) << "the bus thread stops the wheels itself";
@@ -292,8 +292,7 @@ TEST(DynamixelHardware, LateRepliesAreAFaultNamingTheServo) {
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk);
   emulator.set_reply_delay(1, 0.5);
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
-  EXPECT_STREQ(hw.last_error(),
-               "dynamixel ID 1 (left wheel): no status packet in time");
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 1 (left wheel): no status packet in time");
   emulator.set_reply_delay(1, 0.0);
   hw.deactivate();
 }

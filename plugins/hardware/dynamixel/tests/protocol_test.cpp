@@ -2,13 +2,13 @@
 // Protocol 2.0 framing against the example packets of ROBOTIS's Protocol 2.0 description,
 // byte stuffing both ways, the parser's resynchronisation and CRC rejection.
 
+#include "swivel/dynamixel/protocol.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <cstring>
 #include <vector>
-
-#include "swivel/dynamixel/protocol.hpp"
 
 namespace dxl = swivel::dynamixel;
 using Bytes = std::vector<std::uint8_t>;
@@ -73,17 +73,15 @@ TEST(DynamixelBuild, ReadWriteSyncLayout) {
     dxl::PacketBuilder b(1, dxl::Instruction::kWrite);
     const std::uint8_t data[] = {0x00, 0x02, 0x00, 0x00};
     const Bytes w = to_vector(dxl::build_write(b, 116, data));
-    EXPECT_EQ(Bytes(w.begin(), w.end() - 2),
-              (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x01, 0x09, 0x00, 0x03, 0x74, 0x00, 0x00, 0x02, 0x00,
-                     0x00}));
+    EXPECT_EQ(Bytes(w.begin(), w.end() - 2), (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x01, 0x09, 0x00, 0x03,
+                                                    0x74, 0x00, 0x00, 0x02, 0x00, 0x00}));
   }
   {
     dxl::PacketBuilder b(dxl::kBroadcastId, dxl::Instruction::kSyncRead);
     const std::uint8_t ids[] = {1, 2};
     const Bytes w = to_vector(dxl::build_sync_read(b, 132, 4, ids));
-    EXPECT_EQ(Bytes(w.begin(), w.end() - 2),
-              (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x09, 0x00, 0x82, 0x84, 0x00, 0x04, 0x00, 0x01,
-                     0x02}));
+    EXPECT_EQ(Bytes(w.begin(), w.end() - 2), (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x09, 0x00, 0x82,
+                                                    0x84, 0x00, 0x04, 0x00, 0x01, 0x02}));
   }
   {
     dxl::PacketBuilder b(dxl::kBroadcastId, dxl::Instruction::kSyncWrite);
@@ -91,8 +89,8 @@ TEST(DynamixelBuild, ReadWriteSyncLayout) {
     const std::uint8_t data[] = {0x96, 0, 0, 0, 0xAA, 0, 0, 0};
     const Bytes w = to_vector(dxl::build_sync_write(b, 116, 4, ids, data));
     EXPECT_EQ(Bytes(w.begin(), w.end() - 2),
-              (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x11, 0x00, 0x83, 0x74, 0x00, 0x04, 0x00, 0x01,
-                     0x96, 0x00, 0x00, 0x00, 0x02, 0xAA, 0x00, 0x00, 0x00}));
+              (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x11, 0x00, 0x83, 0x74, 0x00, 0x04,
+                     0x00, 0x01, 0x96, 0x00, 0x00, 0x00, 0x02, 0xAA, 0x00, 0x00, 0x00}));
     // A data block of the wrong size is refused.
     dxl::PacketBuilder bad(dxl::kBroadcastId, dxl::Instruction::kSyncWrite);
     EXPECT_TRUE(dxl::build_sync_write(bad, 116, 4, ids, std::span(data).first(7)).empty());
@@ -104,9 +102,8 @@ TEST(DynamixelBuild, StuffsHeaderPatternInParameters) {
   const std::uint8_t data[] = {0xFF, 0xFF, 0xFD, 0x01};
   const Bytes w = to_vector(dxl::build_write(b, 0x0010, data));
   // INST 03, address 10 00, then FF FF FD FD 01: length = 1 + 2 + 5 + 2 = 10.
-  EXPECT_EQ(Bytes(w.begin(), w.end() - 2),
-            (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x03, 0x0A, 0x00, 0x03, 0x10, 0x00, 0xFF, 0xFF, 0xFD,
-                   0xFD, 0x01}));
+  EXPECT_EQ(Bytes(w.begin(), w.end() - 2), (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x03, 0x0A, 0x00, 0x03,
+                                                  0x10, 0x00, 0xFF, 0xFF, 0xFD, 0xFD, 0x01}));
   dxl::Parser parser;
   std::vector<dxl::Packet> packets;
   EXPECT_EQ(feed_all(parser, w, &packets),
@@ -130,8 +127,8 @@ TEST(DynamixelParser, DecodesThePublishedStatusAfterGarbageAndSplitInput) {
     std::size_t used = 0;
     const auto r = parser.feed(std::span(wire).subspan(i, 1), used);
     EXPECT_EQ(used, 1U);
-    EXPECT_EQ(r, i + 1 == wire.size() ? dxl::Parser::Result::kPacket
-                                      : dxl::Parser::Result::kNeedMore)
+    EXPECT_EQ(r,
+              i + 1 == wire.size() ? dxl::Parser::Result::kPacket : dxl::Parser::Result::kNeedMore)
         << "at byte " << i;
   }
   const dxl::Packet& p = parser.packet();
@@ -149,9 +146,9 @@ TEST(DynamixelParser, RejectsACorruptCrcAndRecoversOnTheNextPacket) {
   Bytes wire = bad;
   wire.insert(wire.end(), good.begin(), good.end());
   dxl::Parser parser;
-  EXPECT_EQ(feed_all(parser, wire), (std::vector<dxl::Parser::Result>{
-                                        dxl::Parser::Result::kCrcError,
-                                        dxl::Parser::Result::kPacket}));
+  EXPECT_EQ(feed_all(parser, wire),
+            (std::vector<dxl::Parser::Result>{dxl::Parser::Result::kCrcError,
+                                              dxl::Parser::Result::kPacket}));
 }
 
 TEST(DynamixelParser, RejectsImpossibleLengths) {
@@ -212,9 +209,9 @@ TEST(DynamixelErrors, NamesHardwareErrorBitsAndErrorNumbers) {
 TEST(DynamixelBuild, MatchesThePublishedReadWriteAndSyncExamples) {
   // The e-manual's examples, CRC bytes included.
   dxl::PacketBuilder read(1, dxl::Instruction::kRead);
-  EXPECT_EQ(to_vector(dxl::build_read(read, 132, 4)),
-            (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x01, 0x07, 0x00, 0x02, 0x84, 0x00, 0x04, 0x00, 0x1D,
-                   0x15}));
+  EXPECT_EQ(
+      to_vector(dxl::build_read(read, 132, 4)),
+      (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0x01, 0x07, 0x00, 0x02, 0x84, 0x00, 0x04, 0x00, 0x1D, 0x15}));
   dxl::PacketBuilder write(1, dxl::Instruction::kWrite);
   const std::uint8_t goal[] = {0x00, 0x02, 0x00, 0x00};
   EXPECT_EQ(to_vector(dxl::build_write(write, 116, goal)),
@@ -228,6 +225,6 @@ TEST(DynamixelBuild, MatchesThePublishedReadWriteAndSyncExamples) {
   dxl::PacketBuilder sync_write(dxl::kBroadcastId, dxl::Instruction::kSyncWrite);
   const std::uint8_t goals[] = {0x96, 0, 0, 0, 0xAA, 0, 0, 0};
   EXPECT_EQ(to_vector(dxl::build_sync_write(sync_write, 116, 4, ids, goals)),
-            (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x11, 0x00, 0x83, 0x74, 0x00, 0x04, 0x00, 0x01,
-                   0x96, 0x00, 0x00, 0x00, 0x02, 0xAA, 0x00, 0x00, 0x00, 0x82, 0x87}));
+            (Bytes{0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x11, 0x00, 0x83, 0x74, 0x00, 0x04, 0x00,
+                   0x01, 0x96, 0x00, 0x00, 0x00, 0x02, 0xAA, 0x00, 0x00, 0x00, 0x82, 0x87}));
 }

@@ -39,9 +39,10 @@ struct Fault {
 };
 
 int usage() {
-  std::fputs("usage: swivel-dxl-emulator --ids 1,2 [--baud N] [--link PATH] "
-             "[--fault silence|crc|hwerror|slow:ID:START_S ...]\n",
-             stderr);
+  std::fputs(
+      "usage: swivel-dxl-emulator --ids 1,2 [--baud N] [--link PATH] "
+      "[--fault silence|crc|hwerror|slow:ID:START_S ...]\n",
+      stderr);
   return swivel::cli::kUsageError;
 }
 

@@ -123,12 +123,11 @@ void validate_effects(const RobotModel& model) {
       other.drivetrain = model.drivetrain == DrivetrainKind::kSwpc ? DrivetrainKind::kDifferential
                                                                    : DrivetrainKind::kSwpc;
       const bool elsewhere = find_effect(effect_library(other), name) != nullptr;
-      throw std::invalid_argument(
-          "effects." + name + ": " +
-          (elsewhere ? std::string("not available for a ") + drivetrain_name(model.drivetrain) +
-                           " robot"
-                     : std::string("unknown effect")) +
-          " (available: " + names_of(lib) + ")");
+      throw std::invalid_argument("effects." + name + ": " +
+                                  (elsewhere ? std::string("not available for a ") +
+                                                   drivetrain_name(model.drivetrain) + " robot"
+                                             : std::string("unknown effect")) +
+                                  " (available: " + names_of(lib) + ")");
     }
     for (const auto& [key, value] : params) {
       const EffectParamInfo* info = nullptr;
@@ -195,8 +194,8 @@ PlantParams resolve_plant(const RobotModel& model) {
   } else {
     if (model.modules.size() < 2 || model.modules.size() > kMaxModules) {
       throw std::invalid_argument("swpc model '" + model.name + "' has " +
-                                  std::to_string(model.modules.size()) +
-                                  " modules; expected 2.." + std::to_string(kMaxModules));
+                                  std::to_string(model.modules.size()) + " modules; expected 2.." +
+                                  std::to_string(kMaxModules));
     }
     const EffectParams& caster = effect("caster_offset") ? *effect("caster_offset") : kNone;
     const EffectParams& steer = effect("steering_offset") ? *effect("steering_offset") : kNone;

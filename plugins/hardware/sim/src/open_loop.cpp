@@ -18,7 +18,9 @@ void pivot(const SwpcModuleParams& m, double phi_rad, double& cx, double& cy) no
   cy = m.y_m - m.caster_offset_m * std::sin(phi_rad);
 }
 
-Twist2 rotation_about(double cx, double cy, double w) noexcept { return Twist2{w * cy, -w * cx, w}; }
+Twist2 rotation_about(double cx, double cy, double w) noexcept {
+  return Twist2{w * cy, -w * cx, w};
+}
 
 }  // namespace
 
@@ -65,10 +67,10 @@ void OpenLoopController::velocity(const Twist2& twist, const HardwareState& meas
     const double phi = measured.steer_angle_rad[i] + m.steering_offset_rad;
     const swpc::ModuleRates rates = swpc::inverse_module(m, phi, twist);
     out.wheel_rate_radps[i] = rates.wheel_rate_radps;
-    out.steer_rate_radps[i] = max_steer_rate_radps_ > 0.0
-                                  ? std::clamp(rates.steer_rate_radps, -max_steer_rate_radps_,
-                                               max_steer_rate_radps_)
-                                  : rates.steer_rate_radps;
+    out.steer_rate_radps[i] =
+        max_steer_rate_radps_ > 0.0
+            ? std::clamp(rates.steer_rate_radps, -max_steer_rate_radps_, max_steer_rate_radps_)
+            : rates.steer_rate_radps;
   }
 }
 
@@ -99,7 +101,8 @@ bool OpenLoopController::calibration(const CalibrationMotion& motion, ActuatorCo
       ok = false;
       continue;
     }
-    out.wheel_rate_radps[i] = swpc::inverse_module(nominal_.modules[i], phi, twist).wheel_rate_radps;
+    out.wheel_rate_radps[i] =
+        swpc::inverse_module(nominal_.modules[i], phi, twist).wheel_rate_radps;
   }
   if (!ok) {
     for (std::size_t i = 0; i < n; ++i) out.wheel_rate_radps[i] = 0.0;

@@ -48,8 +48,8 @@ SimFault parse_fault(ParamReader& f, std::size_t modules) {
     if (!is_wheel_kind(fault.kind)) {
       f.fail("module", "applies only to nan_wheel, out_of_range_wheel and frozen_encoder");
     }
-    fault.module = static_cast<std::uint32_t>(
-        f.integer("module", 0, static_cast<int>(modules) - 1));
+    fault.module =
+        static_cast<std::uint32_t>(f.integer("module", 0, static_cast<int>(modules) - 1));
   }
   if (f.has("value")) {
     if (fault.kind != SimFaultKind::kOutOfRangeWheel) {
@@ -86,8 +86,7 @@ void SimHardware::configure(const PluginContext& ctx) {
   sim::NonSystematicErrors& ns = options.nonsystematic;
   ns.wheel_slip_std = slip.number_or("wheel_std", ns.wheel_slip_std, 0.0, 0.5);
   ns.lateral_scrub_std = slip.number_or("lateral_scrub_std", ns.lateral_scrub_std, 0.0, 0.5);
-  ns.correlation_time_s =
-      slip.number_or("correlation_time_s", ns.correlation_time_s, 1e-3, 1e3);
+  ns.correlation_time_s = slip.number_or("correlation_time_s", ns.correlation_time_s, 1e-3, 1e3);
   slip.finish();
   const YAML::Node fault_list = params.sequence("faults");
   if (fault_list.size() > kMaxFaults) {
@@ -113,7 +112,8 @@ void SimHardware::configure(const PluginContext& ctx) {
         truth.module_count() != ctx.robot->module_count()) {
       params.fail("true_model", "'" + path.string() +
                                     "' has a different drivetrain or module count than the "
-                                    "robot model '" + ctx.robot->source_file + "'");
+                                    "robot model '" +
+                                    ctx.robot->source_file + "'");
     }
   }
   try {
@@ -175,9 +175,7 @@ Status SimHardware::apply_faults(double t_s, HardwareState& out) noexcept {
       case SimFaultKind::kInfGyro:
         out.gyro_wz_radps = std::numeric_limits<double>::infinity();
         break;
-      case SimFaultKind::kOutOfRangeWheel:
-        out.wheel_angle_rad[m] += a.fault.value_rad;
-        break;
+      case SimFaultKind::kOutOfRangeWheel: out.wheel_angle_rad[m] += a.fault.value_rad; break;
       case SimFaultKind::kFrozenEncoder:
         if (!a.frozen) {
           a.frozen = true;
@@ -191,8 +189,7 @@ Status SimHardware::apply_faults(double t_s, HardwareState& out) noexcept {
         break;
       case SimFaultKind::kStall:
       case SimFaultKind::kReadError:
-      case SimFaultKind::kWriteError:
-        break;  // handled before the reading / in write()
+      case SimFaultKind::kWriteError: break;  // handled before the reading / in write()
     }
   }
   last_wheel_rad_ = out.wheel_angle_rad;

@@ -65,8 +65,8 @@ enum class SimFaultKind : std::uint8_t {
 
 /// The `kind:` names, in SimFaultKind order.
 inline constexpr std::array<const char*, 8> kSimFaultKindNames = {
-    "nan_wheel", "inf_gyro",  "out_of_range_wheel", "frozen_encoder",
-    "gyro_dropout", "stall", "read_error",          "write_error"};
+    "nan_wheel",    "inf_gyro", "out_of_range_wheel", "frozen_encoder",
+    "gyro_dropout", "stall",    "read_error",         "write_error"};
 
 /// The kind named `name`, or nullopt. Real-time safe.
 std::optional<SimFaultKind> sim_fault_kind(const char* name) noexcept;
@@ -74,8 +74,8 @@ std::optional<SimFaultKind> sim_fault_kind(const char* name) noexcept;
 /// One fault of the simulated hardware.
 struct SimFault {
   SimFaultKind kind = SimFaultKind::kReadError;
-  double start_s = 0.0;     ///< sim time (since the first read) it becomes active
-  double duration_s = 0.0;  ///< active for reads with start_s <= t < start_s + duration_s
+  double start_s = 0.0;      ///< sim time (since the first read) it becomes active
+  double duration_s = 0.0;   ///< active for reads with start_s <= t < start_s + duration_s
   std::uint32_t module = 0;  ///< wheel kinds: which module's encoder
   double value_rad = 100.0;  ///< out_of_range_wheel: the jump
 };

@@ -98,7 +98,7 @@ World::World(const RobotModel& true_model, const SimOptions& options)
 double World::gaussian(std::mt19937_64& rng) noexcept {
   // Box-Muller without a cached second value, so each stream's sequence depends only on
   // how many numbers it has produced.
-  constexpr double kScale = 1.0 / 9007199254740992.0;  // 2^-53
+  constexpr double kScale = 1.0 / 9007199254740992.0;                    // 2^-53
   const double u1 = (static_cast<double>(rng() >> 11U) + 1.0) * kScale;  // (0, 1]
   const double u2 = static_cast<double>(rng() >> 11U) * kScale;          // [0, 1)
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
@@ -131,8 +131,8 @@ Status World::step(double dt_s, const ActuatorCommand& command) noexcept {
     }
   }
   if (dt_s == 0.0) return Status::kOk;
-  const auto count =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(dt_s / options_.substep_s - 1e-9)));
+  const auto count = std::max<std::int64_t>(
+      1, static_cast<std::int64_t>(std::ceil(dt_s / options_.substep_s - 1e-9)));
   const double h = dt_s / static_cast<double>(count);
   for (std::int64_t k = 0; k < count; ++k) substep(h, command);
   return Status::kOk;
@@ -166,8 +166,8 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
         m.steer_rate_radps += follow_steer * (command.steer_rate_radps[i] - m.steer_rate_radps);
       }
       const double accel = (m.wheel_rate_radps - before) / h;
-      double g = m.wheel_rate_radps -
-                 plant_.slip_gain_per_radps2 * std::abs(m.wheel_rate_radps) * accel;
+      double g =
+          m.wheel_rate_radps - plant_.slip_gain_per_radps2 * std::abs(m.wheel_rate_radps) * accel;
       if (ns.wheel_slip_std > 0.0) {
         m.slip_state = decay * m.slip_state + drive * ns.wheel_slip_std * gaussian(process_rng_);
         g *= 1.0 + m.slip_state;
@@ -176,7 +176,8 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     }
 
     bool all_velocity = true;
-    for (std::size_t i = 0; i < n_; ++i) all_velocity = all_velocity && command.mode[i] == ModuleDriveMode::kVelocity;
+    for (std::size_t i = 0; i < n_; ++i)
+      all_velocity = all_velocity && command.mode[i] == ModuleDriveMode::kVelocity;
     Twist2 t;
     if (!options_.move_body && all_velocity) {
       // Actuators only: the body stays where it is.
@@ -281,9 +282,9 @@ Twist2 World::swpc_twist(const ActuatorCommand& command, const double* ground) n
   }
   const std::span<const SwpcModuleParams> geometry(plant_.modules.data(), n_);
   if (all_velocity) {
-    const swpc::ForwardResult r =
-        swpc::forward(geometry, std::span<const double>(phi.data(), n_),
-                      std::span<const double>(steer.data(), n_), std::span<const double>(ground, n_));
+    const swpc::ForwardResult r = swpc::forward(geometry, std::span<const double>(phi.data(), n_),
+                                                std::span<const double>(steer.data(), n_),
+                                                std::span<const double>(ground, n_));
     return r.ok ? r.twist : Twist2{};
   }
   if (locked > 1) return Twist2{};  // two fixed contact points: the robot cannot move

@@ -58,8 +58,8 @@ TEST_P(CalibrationMotionTest, RobotTurnsAboutTheLockedContactAndCastersSelfAlign
   HardwareState start;
   world.read(start);
   const Pose2 pivot = world.contact_point_world(locked);
-  const double radius = std::hypot(options.start_pose.x_m - pivot.x_m,
-                                   options.start_pose.y_m - pivot.y_m);
+  const double radius =
+      std::hypot(options.start_pose.x_m - pivot.x_m, options.start_pose.y_m - pivot.y_m);
   EXPECT_GT(radius, 0.2);
 
   double yaw = options.start_pose.yaw_rad;
@@ -136,8 +136,8 @@ TEST(CalibrationMotion, TorqueDrivenWheelsRollWithoutSlipVelocityTrackedOnesSlip
           std::max(worst_slip[torque == 1 ? 0 : 1], std::abs(std::abs(rolled) - arc) / arc);
     }
   }
-  EXPECT_LT(worst_slip[0], 1e-4);   // torque: the encoders measure the arcs
-  EXPECT_GT(worst_slip[1], 1e-3);   // velocity: commanded with the design radii, they slip
+  EXPECT_LT(worst_slip[0], 1e-4);  // torque: the encoders measure the arcs
+  EXPECT_GT(worst_slip[1], 1e-3);  // velocity: commanded with the design radii, they slip
 }
 
 TEST(CalibrationMotion, TwoLockedModulesHoldTheRobot) {

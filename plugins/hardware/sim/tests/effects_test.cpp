@@ -46,8 +46,9 @@ ActuatorCommand wheels(double left, double right) {
 TEST(EffectLibrary, ListsTheEffectsOfEachDrivetrain) {
   std::vector<std::string> diff;
   for (const EffectInfo& e : effect_library(docent())) diff.push_back(e.name);
-  EXPECT_EQ(diff, (std::vector<std::string>{"gyro_bias", "gyro_scale", "wheel_radius", "track_width",
-                                            "slip", "actuator_lag", "sensor_latency"}));
+  EXPECT_EQ(diff,
+            (std::vector<std::string>{"gyro_bias", "gyro_scale", "wheel_radius", "track_width",
+                                      "slip", "actuator_lag", "sensor_latency"}));
   const auto swpc = effect_library(swpc4());
   const EffectInfo* steer = find_effect(swpc, "steering_offset");
   ASSERT_NE(steer, nullptr);
@@ -91,8 +92,9 @@ TEST(EffectLibrary, ErrorsNameEffectAndParameter) {
             "effects.gyro_scale.scale: 3 is outside [0.5, 2]");
   model = docent();
   model.effects["floor_bumps"] = {};
-  EXPECT_NE(message_of([&] { validate_effects(model); }).find("effects.floor_bumps: unknown effect"),
-            std::string::npos);
+  EXPECT_NE(
+      message_of([&] { validate_effects(model); }).find("effects.floor_bumps: unknown effect"),
+      std::string::npos);
 }
 
 TEST(EffectLibrary, SetEffectParsesAssignments) {

@@ -38,8 +38,8 @@ class SimFaultsTest : public ::testing::Test {
 
   // Configures, starts the clock and sets both wheels turning at 5 rad/s.
   void start(const std::string& faults_yaml) {
-    hw_.configure(context("{sensor_noise: false, motion_capture: false, faults: " + faults_yaml +
-                          "}"));
+    hw_.configure(
+        context("{sensor_noise: false, motion_capture: false, faults: " + faults_yaml + "}"));
     ASSERT_EQ(hw_.read(kT0S, state_), Status::kOk);
     ActuatorCommand c;
     c.module_count = 2;
@@ -139,8 +139,9 @@ TEST_F(SimFaultsTest, StallAnswersErrorsWithoutBlockingWhileTheWorldMoves) {
 }
 
 TEST_F(SimFaultsTest, ReadAndWriteErrorsNameThemselves) {
-  start("[{kind: read_error, start_s: 0.0015, duration_s: 0.001},"
-        " {kind: write_error, start_s: 0.0035, duration_s: 0.001}]");
+  start(
+      "[{kind: read_error, start_s: 0.0015, duration_s: 0.001},"
+      " {kind: write_error, start_s: 0.0035, duration_s: 0.001}]");
   ASSERT_EQ(read_at(1), Status::kOk);
   ASSERT_EQ(read_at(2), Status::kError);
   EXPECT_STREQ(hw_.last_error(), "sim: injected read error");

@@ -52,9 +52,10 @@ class Odometry {
     const double dt = cur.stamp_s - prev.stamp_s;
     if (!(dt > 0.0)) return;
     if (model_.drivetrain == DrivetrainKind::kDifferential) {
-      pose_ = compose(pose_, differential::forward_increment(
-                                 model_.differential, cur.wheel_angle_rad[0] - prev.wheel_angle_rad[0],
-                                 cur.wheel_angle_rad[1] - prev.wheel_angle_rad[1]));
+      pose_ =
+          compose(pose_, differential::forward_increment(
+                             model_.differential, cur.wheel_angle_rad[0] - prev.wheel_angle_rad[0],
+                             cur.wheel_angle_rad[1] - prev.wheel_angle_rad[1]));
       return;
     }
     const std::size_t n = model_.modules.size();
@@ -68,9 +69,9 @@ class Odometry {
       steer[i] = (cur.steer_angle_rad[i] - prev.steer_angle_rad[i]) / dt;
       wheel[i] = (cur.wheel_angle_rad[i] - prev.wheel_angle_rad[i]) / dt;
     }
-    const swpc::ForwardResult r = swpc::forward(model_.modules, std::span<const double>(phi, n),
-                                                std::span<const double>(steer, n),
-                                                std::span<const double>(wheel, n));
+    const swpc::ForwardResult r =
+        swpc::forward(model_.modules, std::span<const double>(phi, n),
+                      std::span<const double>(steer, n), std::span<const double>(wheel, n));
     if (r.ok) pose_ = compose(pose_, swpc::integrate_twist(r.twist, dt));
   }
 

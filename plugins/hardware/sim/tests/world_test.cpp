@@ -98,8 +98,7 @@ TEST(WorldDifferential, NominalOdometryMatchesTruthWithinQuantization) {
   const double heading_bound = 0.075 * kCountsRad / 0.40;
   EXPECT_NEAR(wrap(r.odometry.yaw_rad - r.truth.yaw_rad), 0.0, heading_bound);
   const double position_bound = heading_bound * r.path_m + 0.075 * kCountsRad;
-  EXPECT_LT(std::hypot(r.odometry.x_m - r.truth.x_m, r.odometry.y_m - r.truth.y_m),
-            position_bound);
+  EXPECT_LT(std::hypot(r.odometry.x_m - r.truth.x_m, r.odometry.y_m - r.truth.y_m), position_bound);
 }
 
 TEST(WorldDifferential, RightWheelRadiusErrorTurnsLeftByTheExpectedAmount) {
@@ -142,7 +141,8 @@ TEST(WorldSwpc, NominalOdometryMatchesTruthAlongACurvedPath) {
 TEST(WorldSwpc, LargerTrueWheelsDriveFurtherThanOdometrySays) {
   const RobotModel nominal = swpc4();
   RobotModel truth = nominal;
-  for (int i = 1; i <= 4; ++i) truth.effects["wheel_radius"]["module_" + std::to_string(i) + "_scale"] = 1.02;
+  for (int i = 1; i <= 4; ++i)
+    truth.effects["wheel_radius"]["module_" + std::to_string(i) + "_scale"] = 1.02;
   World world(truth, quiet(false));
   const RunResult r = drive(world, nominal, 10.0, [](double) { return Twist2{0.3, 0.0, 0.0}; });
   EXPECT_NEAR(r.odometry.x_m, 3.0, 1e-6);
@@ -369,8 +369,10 @@ TEST(OpenLoop, SteeringRatesAreClampedToTheRobotsLimit) {
   ActuatorCommand slower;
   OpenLoopController(model, other).velocity(sideways, measured, slower);
   for (std::size_t i = 0; i < 4; ++i) {
-    EXPECT_EQ(std::abs(limited.steer_rate_radps[i]), std::min(6.0, std::abs(free.steer_rate_radps[i])));
-    EXPECT_EQ(std::abs(slower.steer_rate_radps[i]), std::min(2.0, std::abs(free.steer_rate_radps[i])));
+    EXPECT_EQ(std::abs(limited.steer_rate_radps[i]),
+              std::min(6.0, std::abs(free.steer_rate_radps[i])));
+    EXPECT_EQ(std::abs(slower.steer_rate_radps[i]),
+              std::min(2.0, std::abs(free.steer_rate_radps[i])));
     EXPECT_EQ(limited.wheel_rate_radps[i], free.wheel_rate_radps[i]);
   }
 }

@@ -34,8 +34,8 @@ void KalmanLocalization::configure(const PluginContext& ctx) {
       params.number_or("rotation_noise_rad_per_sqrt_rad", n.rotation_rad_per_sqrt_rad, 0.0, 10.0);
   n.yaw_rad_per_sqrt_m =
       params.number_or("yaw_noise_rad_per_sqrt_m", n.yaw_rad_per_sqrt_m, 0.0, 10.0);
-  n.bias_walk_radps_per_sqrt_s = params.number_or(
-      "bias_random_walk_radps_per_sqrt_s", n.bias_walk_radps_per_sqrt_s, 0.0, 1.0);
+  n.bias_walk_radps_per_sqrt_s =
+      params.number_or("bias_random_walk_radps_per_sqrt_s", n.bias_walk_radps_per_sqrt_s, 0.0, 1.0);
   n.gyro_noise_radps =
       params.number_or("gyro_noise_radps", robot.sensors.gyro.noise_rad_s, 0.0, 10.0);
   n.fix_position_noise_m = params.number_or(
@@ -47,8 +47,8 @@ void KalmanLocalization::configure(const PluginContext& ctx) {
   c.initial_yaw_sigma_rad = params.number_or("initial_yaw_sigma_rad", 0.0, 0.0, 10.0);
   c.initial_bias_sigma_radps =
       params.number_or("initial_bias_sigma_radps", c.initial_bias_sigma_radps, 0.0, 10.0);
-  c.handover_position_sigma_m = params.number_or("handover_position_sigma_m",
-                                                  c.handover_position_sigma_m, 0.0, 1e3);
+  c.handover_position_sigma_m =
+      params.number_or("handover_position_sigma_m", c.handover_position_sigma_m, 0.0, 1e3);
   c.handover_yaw_sigma_rad =
       params.number_or("handover_yaw_sigma_rad", c.handover_yaw_sigma_rad, 0.0, 10.0);
   c.lcakf.accel_mps2 = params.number_or("lcakf_accel_noise_mps2", c.lcakf.accel_mps2, 1e-9, 1e3);
@@ -70,7 +70,8 @@ void KalmanLocalization::reset(const PoseEstimate& initial) {
   const double yaw_var = config_.initial_yaw_sigma_rad * config_.initial_yaw_sigma_rad;
   Matrix3 cov = Matrix3::Zero();
   cov.diagonal() << pos_var, pos_var, yaw_var;
-  if (initial.has_covariance) cov = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(initial.covariance.data());
+  if (initial.has_covariance)
+    cov = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(initial.covariance.data());
   ekf_.reset(initial.pose, cov, 0.0,
              config_.initial_bias_sigma_radps * config_.initial_bias_sigma_radps);
   lcakf_.reset(initial.pose.x_m, initial.pose.y_m, 0.0);
@@ -95,8 +96,10 @@ Status KalmanLocalization::hand_over(const PoseEstimate& current) noexcept {
   }
   if (config_.mode == KalmanMode::kEkf) {
     const localization::EkfResult r = ekf_.set_pose(p, &cov);
-    if (r == localization::EkfResult::kNonFinite) return fail("kalman: non-finite covariance handed over");
-    if (r == localization::EkfResult::kNotPsd) return fail("kalman: handed-over covariance is not positive semi-definite");
+    if (r == localization::EkfResult::kNonFinite)
+      return fail("kalman: non-finite covariance handed over");
+    if (r == localization::EkfResult::kNotPsd)
+      return fail("kalman: handed-over covariance is not positive semi-definite");
   } else {
     if (!cov.allFinite()) return fail("kalman: non-finite covariance handed over");
     lcakf_.set_position(p.x_m, p.y_m, cov(0, 0), cov(1, 1));
@@ -119,8 +122,10 @@ Status KalmanLocalization::update(const OdometryIncrement& odometry,
         readings.motion_capture.valid) {
       r = ekf_.update_pose_fix(readings.motion_capture.pose);
     }
-    if (r == localization::EkfResult::kNonFinite) return fail("kalman: non-finite odometry, gyro or pose fix");
-    if (r == localization::EkfResult::kNotPsd) return fail("kalman: covariance is not positive semi-definite");
+    if (r == localization::EkfResult::kNonFinite)
+      return fail("kalman: non-finite odometry, gyro or pose fix");
+    if (r == localization::EkfResult::kNotPsd)
+      return fail("kalman: covariance is not positive semi-definite");
     return Status::kOk;
   }
 

@@ -17,7 +17,7 @@ struct KalmanConfig {
   KalmanMode mode = KalmanMode::kEkf;
   localization::EkfNoise ekf;
   localization::LcakfNoise lcakf;
-  localization::EgConfig eg;            ///< gyro correction (both modes), heading (lcakf)
+  localization::EgConfig eg;  ///< gyro correction (both modes), heading (lcakf)
   double initial_position_sigma_m = 0.0;
   double initial_yaw_sigma_rad = 0.0;
   double initial_bias_sigma_radps = 0.02;
@@ -26,7 +26,7 @@ struct KalmanConfig {
   /// zero covariance would ignore every motion-capture fix for a long time.
   double handover_position_sigma_m = 0.1;
   double handover_yaw_sigma_rad = 0.05;
-  bool use_pose_fixes = true;           ///< ekf: update from valid motion-capture samples
+  bool use_pose_fixes = true;  ///< ekf: update from valid motion-capture samples
 };
 
 class KalmanLocalization final : public Localization {

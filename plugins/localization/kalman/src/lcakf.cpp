@@ -2,7 +2,6 @@
 #include "swivel/localization/lcakf.hpp"
 
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
 

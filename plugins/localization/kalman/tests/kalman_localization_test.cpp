@@ -101,7 +101,8 @@ TEST(KalmanLocalization, LcakfModeFollowsEgPositions) {
   KalmanLocalization loc;
   loc.configure(context(robot, "{mode: lcakf, heading_source: encoders}"));
   ASSERT_EQ(loc.config().mode, KalmanMode::kLcakf);
-  for (int i = 0; i < 5000; ++i) ASSERT_EQ(loc.update(step_of(3e-4, 0.0), HardwareState{}), Status::kOk);
+  for (int i = 0; i < 5000; ++i)
+    ASSERT_EQ(loc.update(step_of(3e-4, 0.0), HardwareState{}), Status::kOk);
   const PoseEstimate e = loc.estimate();
   EXPECT_NEAR(e.pose.x_m, 1.5, 1e-3);  // constant velocity: no lag once converged
   EXPECT_NEAR(e.pose.y_m, 0.0, 1e-12);

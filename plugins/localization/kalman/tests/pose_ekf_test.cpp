@@ -29,7 +29,8 @@ TEST(PoseEkf, GyroBiasConvergesOnStraightLine) {
   std::normal_distribution<double> gyro_noise(0.0, noise.gyro_noise_radps);
   const int steps = 60000;  // 60 s
   for (int i = 0; i < steps; ++i) {
-    ASSERT_EQ(ekf.step(Pose2{v * kDt, 0.0, 0.0}, kDt, bias + gyro_noise(rng), true), EkfResult::kOk);
+    ASSERT_EQ(ekf.step(Pose2{v * kDt, 0.0, 0.0}, kDt, bias + gyro_noise(rng), true),
+              EkfResult::kOk);
   }
   const double bias_sd = std::sqrt(ekf.covariance()(3, 3));
   // Within 10 % of the bias, and within the filter's own 3 sigma.

@@ -92,9 +92,8 @@ bool Lcalsm::push(const Pose2& eg, double yaw_unwrapped_rad, double distance_m,
                                config_.max_window_heading_change_rad;
   // heading_aligned: a gentle curve turns too little across one window to be seen as a turn,
   // but it leaves the line the segment set out on; the segment ends there as well.
-  const bool left_segment =
-      has_segment_ && std::abs(yaw_unwrapped_rad - anchor_yaw_rad_) >
-                          config_.max_window_heading_change_rad;
+  const bool left_segment = has_segment_ && std::abs(yaw_unwrapped_rad - anchor_yaw_rad_) >
+                                                config_.max_window_heading_change_rad;
   if (in_turn_ || left_segment) has_segment_ = false;
   if (in_turn_) return true;
   if (config_.mode == LsmMode::kPaper) {

@@ -22,13 +22,13 @@ void LsmLocalization::configure(const PluginContext& ctx) {
   lsm.mode = params.choice_or("mode", "paper", {"paper", "heading_aligned"}) == "paper"
                  ? localization::LsmMode::kPaper
                  : localization::LsmMode::kHeadingAligned;
-  lsm.window_points = static_cast<std::size_t>(params.integer_or(
-      "window_points", 10, 3, static_cast<int>(localization::kMaxWindowPoints)));
+  lsm.window_points = static_cast<std::size_t>(
+      params.integer_or("window_points", 10, 3, static_cast<int>(localization::kMaxWindowPoints)));
   // A period alone means time decimation only; both given means whichever comes first.
   const bool has_period = params.has("sample_period_s");
   const bool has_distance = params.has("sample_distance_m");
-  lsm.sample_distance_m = params.number_or("sample_distance_m",
-                                           has_period && !has_distance ? 0.0 : 0.02, 0.0, 10.0);
+  lsm.sample_distance_m =
+      params.number_or("sample_distance_m", has_period && !has_distance ? 0.0 : 0.02, 0.0, 10.0);
   lsm.sample_period_s = params.number_or("sample_period_s", 0.0, 0.0, 10.0);
   lsm.max_window_heading_change_rad =
       params.number_or("max_window_heading_change_rad", 0.1, 1e-6, 3.2);

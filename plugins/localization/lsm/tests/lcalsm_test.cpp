@@ -207,9 +207,10 @@ TEST(Lcalsm, FaithfulMethodCannotRemoveDriftButHeadingAlignedCan) {
   const double raw = max_error_on_drifting_run(LsmMode::kPaper, false);
   const double paper = max_error_on_drifting_run(LsmMode::kPaper, true);
   const double aligned = max_error_on_drifting_run(LsmMode::kHeadingAligned, true);
-  std::printf("max error on a drifting 8 m run: E/G %.4f m, paper %.4f m (%+.1f %%), "
-              "heading_aligned %.4f m (%+.1f %%)\n",
-              raw, paper, 100.0 * (paper - raw) / raw, aligned, 100.0 * (aligned - raw) / raw);
+  std::printf(
+      "max error on a drifting 8 m run: E/G %.4f m, paper %.4f m (%+.1f %%), "
+      "heading_aligned %.4f m (%+.1f %%)\n",
+      raw, paper, 100.0 * (paper - raw) / raw, aligned, 100.0 * (aligned - raw) / raw);
   EXPECT_GT(raw, 0.01);  // the drift is real: about bias v t^2 / 2 = 5 cm
   EXPECT_LT(std::abs(paper - raw), 0.1 * raw);
   EXPECT_LT(aligned, 0.5 * raw);

@@ -17,9 +17,7 @@ bool is_covariance(const Eigen::Matrix3d& m) noexcept {
   return ldlt.vectorD().minCoeff() >= -1e-12 * scale;
 }
 
-EgCovariance::EgCovariance() noexcept {
-  p_.setZero();
-}
+EgCovariance::EgCovariance() noexcept { p_.setZero(); }
 
 void EgCovariance::reset(const Matrix3& pose_cov) noexcept {
   p_.setZero();

@@ -65,7 +65,8 @@ class CommandReplay {
   /// Variance each window's residual gets (channel-major) from not knowing when within its
   /// row each change of the commands came: the change of the residuals when every command
   /// is taken half a row earlier or later, (r+ - r-)^2 / 12 (a uniform instant).
-  [[nodiscard]] std::vector<double> timing_variance(const RobotModel& model, double command_delay_s) const;
+  [[nodiscard]] std::vector<double> timing_variance(const RobotModel& model,
+                                                    double command_delay_s) const;
 
   /// The replayed robot's true pose at every row, from the run's start pose.
   void path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const;

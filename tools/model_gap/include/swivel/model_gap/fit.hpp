@@ -53,20 +53,20 @@ struct FitOptions {
 };
 
 struct FitOutcome {
-  bool ok = false;                  ///< the solver ran and the optimum could be evaluated
+  bool ok = false;  ///< the solver ran and the optimum could be evaluated
   std::vector<double> values;
-  std::vector<double> sigmas;       ///< 1-sigma; infinite for a parameter the data cannot fix
+  std::vector<double> sigmas;  ///< 1-sigma; infinite for a parameter the data cannot fix
   /// 1-sigma as if the rows were independent, s^2 (J'J)^-1: sigmas / naive_sigmas is how
   /// much the residuals' correlation widens each parameter's uncertainty.
   std::vector<double> naive_sigmas;
   std::vector<double> naive_covariance;  ///< p x p row-major, observable subspace
-  std::vector<double> covariance;   ///< p x p row-major, observable subspace only
-  std::vector<char> observable;     ///< per parameter
+  std::vector<double> covariance;        ///< p x p row-major, observable subspace only
+  std::vector<char> observable;          ///< per parameter
   double rss = 0.0;
-  std::size_t n = 0;                ///< rows with data
+  std::size_t n = 0;  ///< rows with data
   double bic = 0.0;
   int iterations = 0;
-  std::vector<double> residuals;    ///< every row at the optimum
+  std::vector<double> residuals;  ///< every row at the optimum
 };
 
 /// n ln(rss / n) + k ln(n): Gaussian residuals of unknown common variance.
@@ -101,7 +101,7 @@ double chi_square_z(double chi2, double dof);
 
 /// d' C^+ d over the observable subspace of the covariance C (p x p row-major), and its
 /// rank; d = values - reference.
-double mahalanobis_squared(const std::vector<double>& difference, const std::vector<double>& covariance,
-                           std::size_t& rank);
+double mahalanobis_squared(const std::vector<double>& difference,
+                           const std::vector<double>& covariance, std::size_t& rank);
 
 }  // namespace swivel::model_gap

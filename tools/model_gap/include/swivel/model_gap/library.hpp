@@ -57,9 +57,9 @@ struct Candidate {
 
 /// What the run shows of the robot's motion, for the limits' starting values.
 struct MotionPeaks {
-  double accel_mps2 = 0.0;           ///< high percentile of the measured body acceleration
+  double accel_mps2 = 0.0;  ///< high percentile of the measured body acceleration
   double angular_accel_radps2 = 0.0;
-  double steer_rate_radps = 0.0;     ///< high percentile of the measured steering rates
+  double steer_rate_radps = 0.0;  ///< high percentile of the measured steering rates
 };
 
 /// The question a candidate belongs to, by name (e.g. "slip" -> sensor to pose,

@@ -7,7 +7,6 @@
 #include <cstddef>
 #include <vector>
 
-
 namespace swivel::model_gap {
 
 enum class PhaseKind { kStanding, kStraight, kTurning, kAccelerating };
@@ -28,10 +27,10 @@ struct PhaseSegment {
 struct PhaseThresholds {
   double standing_speed_mps = 0.01;
   double standing_rate_radps = 0.02;
-  double turning_rate_radps = 0.05;       ///< below this a moving robot goes straight
-  double accel_mps2 = 0.05;               ///< |d speed/dt| at or above this is accelerating
+  double turning_rate_radps = 0.05;  ///< below this a moving robot goes straight
+  double accel_mps2 = 0.05;          ///< |d speed/dt| at or above this is accelerating
   double angular_accel_radps2 = 0.15;
-  double derivative_window_s = 0.4;       ///< command steps are spread over this window
+  double derivative_window_s = 0.4;  ///< command steps are spread over this window
 };
 
 /// Commanded body twist over time (the run's cmd_vx, cmd_vy, cmd_wz columns).

@@ -39,8 +39,8 @@ struct MisfitInputs {
   /// (displacement along the channel's axis, heading change, wheel or steering rotation).
   /// Predicted, not measured: a measured change shares its noise with the residual.
   std::vector<double> own_change;
-  std::vector<double> accel;         ///< per window: mean |commanded acceleration|
-  std::vector<double> start_yaw_rad; ///< per window: world heading at its start
+  std::vector<double> accel;                          ///< per window: mean |commanded acceleration|
+  std::vector<double> start_yaw_rad;                  ///< per window: world heading at its start
   std::vector<std::vector<double>> wheel_sin_change;  ///< [module][window]
   std::vector<std::vector<double>> wheel_cos_change;
 };

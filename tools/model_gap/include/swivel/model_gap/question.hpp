@@ -33,8 +33,9 @@ enum class Verdict { kNoSignificantGap, kNamed, kUnexplained };
 const char* verdict_name(Verdict v);
 
 struct QuestionOptions {
-  double min_z_name = 5.0;    ///< significance an effect needs to be named
-  double min_z_misfit = 5.0;  ///< significance at which a misfit test calls the residual unexplained
+  double min_z_name = 5.0;  ///< significance an effect needs to be named
+  double min_z_misfit =
+      5.0;  ///< significance at which a misfit test calls the residual unexplained
   /// Size (noise sigmas, the largest over channels of the RMS change) below which a
   /// significant effect or misfit is still too small to matter.
   double min_effect_size = 0.5;
@@ -58,21 +59,22 @@ struct QuestionReplay {
   std::size_t windows = 0;
   /// Residuals (channel-major, channel units) of `model` with nuisance values `nuisance`,
   /// for the first `window_limit` windows (the rest NaN).
-  std::function<bool(const RobotModel& model, std::span<const double> nuisance, std::vector<double>& out,
-                     std::size_t window_limit)>
+  std::function<bool(const RobotModel& model, std::span<const double> nuisance,
+                     std::vector<double>& out, std::size_t window_limit)>
       residuals;
   /// Fitted with every candidate and never named (e.g. the commands' timing).
   std::vector<ParamSpec> nuisance;
-  std::vector<double> own_change;               ///< channel-major, for the misfit tests
-  std::vector<std::vector<double>> noise_x;     ///< [channel][window], NoiseModel's x
-  std::vector<double> noise_floor;              ///< per channel, variance
+  std::vector<double> own_change;            ///< channel-major, for the misfit tests
+  std::vector<std::vector<double>> noise_x;  ///< [channel][window], NoiseModel's x
+  std::vector<double> noise_floor;           ///< per channel, variance
   /// Channel-major variance the replay itself adds in each window for a model and nuisance
   /// values (unset: none), e.g. from not knowing when in its row a step of the commands came.
   /// Measured first on the base model, then again on the selection.
-  std::function<std::vector<double>(const RobotModel& model, std::span<const double> nuisance)> known_variance_of;
+  std::function<std::vector<double>(const RobotModel& model, std::span<const double> nuisance)>
+      known_variance_of;
   std::vector<double> known_variance;  ///< the current one (set by analyse_question)
-  std::vector<double> accel;                    ///< per window
-  std::vector<double> start_yaw_rad;            ///< per window
+  std::vector<double> accel;           ///< per window
+  std::vector<double> start_yaw_rad;   ///< per window
   std::vector<std::vector<double>> wheel_sin_change;
   std::vector<std::vector<double>> wheel_cos_change;
 };
@@ -83,12 +85,12 @@ struct FittedEffect {
   bool limits = false;  ///< written to the model's `limits:` (else to `effects:`)
   std::vector<std::string> keys;
   std::vector<double> values;
-  std::vector<double> sigmas;     ///< one standard deviation (infinite: not observable alone)
+  std::vector<double> sigmas;  ///< one standard deviation (infinite: not observable alone)
   /// One standard deviation of what the run fixes of each parameter (its part in the
   /// observable combinations); equals sigmas where a parameter is observable alone.
   std::vector<double> partial_sigmas;
   std::size_t observable_combinations = 0;  ///< of keys.size(); the rest left at the model's values
-  double z = 0.0;                 ///< significance against the nominal model's values
+  double z = 0.0;                           ///< significance against the nominal model's values
   // In fit units (limits as 1 / limit), for checks against a known truth.
   std::vector<double> fit_values;
   std::vector<double> fit_covariance;  ///< row-major, resolution included, observable subspace
@@ -102,21 +104,21 @@ struct CandidateScore {
   std::vector<std::string> param_names;  ///< "effect.key"
   std::vector<double> values;            ///< model units
   std::vector<double> sigmas;
-  std::vector<double> z;                 ///< per effect: significance
-  std::vector<double> size;              ///< per effect: RMS change it brings, noise sigmas
+  std::vector<double> z;     ///< per effect: significance
+  std::vector<double> size;  ///< per effect: RMS change it brings, noise sigmas
   double bic = 0.0;
-  double delta_bic = 0.0;                ///< against the nominal model (negative is better)
-  double explained = 0.0;                ///< share of the nominal whitened sum of squares removed
+  double delta_bic = 0.0;  ///< against the nominal model (negative is better)
+  double explained = 0.0;  ///< share of the nominal whitened sum of squares removed
   int iterations = 0;
-  std::string label_note;                ///< e.g. how far it was fitted
+  std::string label_note;  ///< e.g. how far it was fitted
   [[nodiscard]] std::string label() const;
 };
 
 /// The gap of one channel before and after.
 struct ChannelGap {
   ChannelInfo info;
-  double noise_sigma = 0.0;   ///< median over windows, channel units
-  double rms_before = 0.0;    ///< window residuals, channel units
+  double noise_sigma = 0.0;  ///< median over windows, channel units
+  double rms_before = 0.0;   ///< window residuals, channel units
   double rms_after = 0.0;
   double whitened_rms_before = 0.0;
   double whitened_rms_after = 0.0;
@@ -130,10 +132,10 @@ struct QuestionResult {
   std::vector<CandidateScore> candidates;  ///< best BIC first
   std::vector<MisfitTest> misfits;         ///< on the residual that remains, most significant first
   std::vector<ChannelGap> channels;
-  std::vector<double> nuisance;            ///< fitted nuisance values (with the selection)
-  std::vector<double> residuals_before;    ///< channel-major, channel units
+  std::vector<double> nuisance;          ///< fitted nuisance values (with the selection)
+  std::vector<double> residuals_before;  ///< channel-major, channel units
   std::vector<double> residuals_after;
-  RobotModel augmented;                    ///< base plus the named effects
+  RobotModel augmented;  ///< base plus the named effects
   double wall_time_s = 0.0;
 };
 

@@ -22,7 +22,7 @@ struct RunData {
   std::vector<std::vector<double>> wheel_rad;  ///< [module][sample], cumulative
   std::vector<std::vector<double>> steer_rad;  ///< [module][sample], swpc only
   std::vector<double> gyro_radps;
-  std::vector<double> truth_x_m;     ///< NaN where there is no motion-capture sample
+  std::vector<double> truth_x_m;  ///< NaN where there is no motion-capture sample
   std::vector<double> truth_y_m;
   std::vector<double> truth_yaw_rad;
 

@@ -35,11 +35,11 @@ std::vector<Window> make_windows(const RunData& run, double length_s, double fir
 struct WindowMotion {
   std::vector<double> start_s;
   std::vector<double> duration_s;
-  std::vector<double> wheel_travel_rad;   ///< mean over wheels of |wheel rotation|
-  std::vector<double> steer_travel_rad;   ///< mean over modules of |steering rotation| (swpc)
-  std::vector<double> accel_mps2;         ///< mean |commanded body acceleration|, m/s^2
+  std::vector<double> wheel_travel_rad;  ///< mean over wheels of |wheel rotation|
+  std::vector<double> steer_travel_rad;  ///< mean over modules of |steering rotation| (swpc)
+  std::vector<double> accel_mps2;        ///< mean |commanded body acceleration|, m/s^2
   std::vector<double> angular_accel_radps2;
-  std::vector<double> start_yaw_rad;      ///< world heading at the window's start (motion capture)
+  std::vector<double> start_yaw_rad;  ///< world heading at the window's start (motion capture)
   /// Per module: sin and cos of the wheel angle at the window's end minus at its start.
   std::vector<std::vector<double>> wheel_sin_change;
   std::vector<std::vector<double>> wheel_cos_change;

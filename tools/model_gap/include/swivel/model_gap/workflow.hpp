@@ -70,7 +70,8 @@ struct GapResult {
 /// Runs the workflow on a run with its nominal model.
 /// @throws std::invalid_argument when the run does not fit the model (drivetrain, modules)
 ///         or has no motion capture.
-GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOptions& options = {});
+GapResult analyse_gap(const RobotModel& nominal, const RunData& run,
+                      const GapOptions& options = {});
 
 /// Writes DIR/report.json, DIR/report.md, DIR/model_augmented.yaml and PNG plots (when
 /// gnuplot is available; the report says so when it is not). Creates DIR.

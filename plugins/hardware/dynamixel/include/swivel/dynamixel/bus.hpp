@@ -15,11 +15,11 @@
 namespace swivel::dynamixel {
 
 enum class BusResult : std::uint8_t {
-  kOk,           ///< status packet received (its error byte may still be non-zero)
-  kTimeout,      ///< no status packet from that ID in time
-  kCrcError,     ///< a status packet arrived with a bad CRC
-  kIoError,      ///< the port failed
-  kBadReply,     ///< a status packet of the wrong size
+  kOk,        ///< status packet received (its error byte may still be non-zero)
+  kTimeout,   ///< no status packet from that ID in time
+  kCrcError,  ///< a status packet arrived with a bad CRC
+  kIoError,   ///< the port failed
+  kBadReply,  ///< a status packet of the wrong size
 };
 const char* bus_result_text(BusResult result) noexcept;
 

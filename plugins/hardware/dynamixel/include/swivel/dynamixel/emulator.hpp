@@ -5,8 +5,8 @@
 //
 // It serves PING, READ, WRITE, SYNC_READ and SYNC_WRITE for several IDs, each with a
 // control table of 256 bytes. Motors follow Goal Velocity (operating mode 1) or Goal
-// Position (mode 4, first order, at up to max_position_speed_rev_s) while Torque Enable is 1; writing
-// the Operating Mode with the torque on is refused (access error), as on the servos.
+// Position (mode 4, first order, at up to max_position_speed_rev_s) while Torque Enable is 1;
+// writing the Operating Mode with the torque on is refused (access error), as on the servos.
 // Injectable faults per ID: silence (no status packets), corrupt CRC (replies with a wrong
 // CRC), hardware error bits (Hardware Error Status set, the alert bit in every status, the
 // torque switched off, as the servos do) and slow replies. Every Torque Enable write is
@@ -31,11 +31,11 @@ class Emulator {
  public:
   struct Options {
     std::vector<std::uint8_t> ids{1, 2};
-    std::uint32_t baud = 0;  ///< 0: replies as fast as the pty carries them
-    double return_delay_s = 0.0;  ///< per status packet, like Return Delay Time
-    double max_position_speed_rev_s = 2.0;  ///< position mode: top speed (motor side)
+    std::uint32_t baud = 0;                  ///< 0: replies as fast as the pty carries them
+    double return_delay_s = 0.0;             ///< per status packet, like Return Delay Time
+    double max_position_speed_rev_s = 2.0;   ///< position mode: top speed (motor side)
     double position_time_constant_s = 0.01;  ///< position mode: first-order tracking
-    std::uint16_t model_number = 1020;  ///< XM430-W350
+    std::uint16_t model_number = 1020;       ///< XM430-W350
     int fifo_priority = 0;  ///< > 0: serve on SCHED_FIFO at this priority where permitted
   };
   struct TorqueWrite {
@@ -85,8 +85,8 @@ class Emulator {
   void serve() noexcept;
   void handle(const Packet& request, std::size_t request_bytes, double received_s);
   void advance(double now_s);
-  void write_table(std::uint8_t id, Servo& servo, std::uint16_t address,
-                   const std::uint8_t* data, std::size_t size, double now_s, std::uint8_t& error);
+  void write_table(std::uint8_t id, Servo& servo, std::uint16_t address, const std::uint8_t* data,
+                   std::size_t size, double now_s, std::uint8_t& error);
   void reply(std::uint8_t id, Servo& servo, std::uint8_t error, const std::uint8_t* data,
              std::size_t size, std::size_t request_bytes, double received_s);
   Servo* find(std::uint8_t id);

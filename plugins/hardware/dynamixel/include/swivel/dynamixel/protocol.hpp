@@ -31,13 +31,13 @@ enum class Instruction : std::uint8_t {
 
 /// X-series control table addresses used here (RAM area unless noted).
 namespace address {
-inline constexpr std::uint16_t kOperatingMode = 11;  ///< EEPROM, 1 byte
-inline constexpr std::uint16_t kTorqueEnable = 64;  ///< 1 byte
+inline constexpr std::uint16_t kOperatingMode = 11;        ///< EEPROM, 1 byte
+inline constexpr std::uint16_t kTorqueEnable = 64;         ///< 1 byte
 inline constexpr std::uint16_t kHardwareErrorStatus = 70;  ///< 1 byte
-inline constexpr std::uint16_t kGoalVelocity = 104;  ///< 4 bytes, 0.229 rpm units
-inline constexpr std::uint16_t kGoalPosition = 116;  ///< 4 bytes, 4096 per revolution
-inline constexpr std::uint16_t kPresentVelocity = 128;  ///< 4 bytes
-inline constexpr std::uint16_t kPresentPosition = 132;  ///< 4 bytes
+inline constexpr std::uint16_t kGoalVelocity = 104;        ///< 4 bytes, 0.229 rpm units
+inline constexpr std::uint16_t kGoalPosition = 116;        ///< 4 bytes, 4096 per revolution
+inline constexpr std::uint16_t kPresentVelocity = 128;     ///< 4 bytes
+inline constexpr std::uint16_t kPresentPosition = 132;     ///< 4 bytes
 }  // namespace address
 
 namespace operating_mode {

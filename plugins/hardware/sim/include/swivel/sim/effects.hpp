@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The library of named effects (README "Configuration reference: robot model", `effects:`): small, documented
-// extensions of a robot model that the simulated world applies on top of the model's
+// The library of named effects (README "Configuration reference: robot model", `effects:`): small,
+// documented extensions of a robot model that the simulated world applies on top of the model's
 // parameters. This file and effects.cpp are the only place that defines them: their names,
 // parameters, identity values, ranges and how each alters the world. The model-gap
 // workflow fits the same effects, so what it names is exactly what the simulator does.
@@ -45,7 +45,7 @@ namespace swivel::sim {
 
 /// One parameter of an effect.
 struct EffectParamInfo {
-  std::string key;       ///< e.g. "bias_rad_s", "module_2_scale"
+  std::string key;        ///< e.g. "bias_rad_s", "module_2_scale"
   double identity = 0.0;  ///< value at which the parameter changes nothing
   double min = 0.0;       ///< accepted range, inclusive
   double max = 0.0;
@@ -85,10 +85,10 @@ struct PlantParams {
   std::array<SwpcModuleParams, kMaxModules> modules{};  ///< first module_count used (swpc)
   SensorParams sensors;                                 ///< gyro scale and bias included
   double slip_gain_per_radps2 = 0.0;
-  double actuator_time_constant_s = 0.0;   ///< wheels (and steering without steering_lag)
-  double steering_time_constant_s = 0.0;   ///< steering drives
+  double actuator_time_constant_s = 0.0;  ///< wheels (and steering without steering_lag)
+  double steering_time_constant_s = 0.0;  ///< steering drives
   double sensor_delay_s = 0.0;
-  MotionLimits limits;                     ///< the model's `limits:`
+  MotionLimits limits;  ///< the model's `limits:`
 };
 
 /// Folds `model.effects` into the model's parameters.

@@ -113,11 +113,11 @@ class World {
 
  private:
   struct ModuleState {
-    double phi_rad = 0.0;            // true steering angle
-    double psi_rad = 0.0;            // wheel rotation (what the encoder sees)
-    double wheel_rate_radps = 0.0;   // actual wheel rate (after the lag)
-    double steer_rate_radps = 0.0;   // actual steering rate of the last sub-step
-    double slip_state = 0.0;         // non-systematic slip process
+    double phi_rad = 0.0;           // true steering angle
+    double psi_rad = 0.0;           // wheel rotation (what the encoder sees)
+    double wheel_rate_radps = 0.0;  // actual wheel rate (after the lag)
+    double steer_rate_radps = 0.0;  // actual steering rate of the last sub-step
+    double slip_state = 0.0;        // non-systematic slip process
   };
   // Sensor-side state at one instant, kept for the sensor_latency effect.
   struct SensorSample {

@@ -13,8 +13,8 @@
 namespace swivel::localization {
 
 struct LcakfNoise {
-  double accel_mps2 = 0.5;       ///< std of the white acceleration driving each axis
-  double position_m = 0.01;      ///< std of an E/G position measurement
+  double accel_mps2 = 0.5;   ///< std of the white acceleration driving each axis
+  double position_m = 0.01;  ///< std of an E/G position measurement
 };
 
 class Lcakf {
@@ -46,8 +46,8 @@ class Lcakf {
 
  private:
   LcakfNoise noise_{};
-  Vector2 x_;   // (x, vx)
-  Vector2 y_;   // (y, vy)
+  Vector2 x_;  // (x, vx)
+  Vector2 y_;  // (y, vy)
   Matrix2 px_;
   Matrix2 py_;
 };

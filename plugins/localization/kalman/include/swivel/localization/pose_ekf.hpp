@@ -32,19 +32,19 @@
 namespace swivel::localization {
 
 struct EkfNoise {
-  double translation_m_per_sqrt_m = 0.01;   ///< position std grows as this * sqrt(distance)
-  double rotation_rad_per_sqrt_rad = 0.05;  ///< odometry yaw std per sqrt(rad turned)
-  double yaw_rad_per_sqrt_m = 0.01;         ///< odometry yaw std per sqrt(m travelled)
-  double bias_walk_radps_per_sqrt_s = 1e-5; ///< gyro bias random walk
-  double gyro_noise_radps = 0.002;          ///< per-sample gyro standard deviation
-  double fix_position_noise_m = 0.0003;     ///< pose fix position std
-  double fix_yaw_noise_rad = 0.001;         ///< pose fix yaw std
+  double translation_m_per_sqrt_m = 0.01;    ///< position std grows as this * sqrt(distance)
+  double rotation_rad_per_sqrt_rad = 0.05;   ///< odometry yaw std per sqrt(rad turned)
+  double yaw_rad_per_sqrt_m = 0.01;          ///< odometry yaw std per sqrt(m travelled)
+  double bias_walk_radps_per_sqrt_s = 1e-5;  ///< gyro bias random walk
+  double gyro_noise_radps = 0.002;           ///< per-sample gyro standard deviation
+  double fix_position_noise_m = 0.0003;      ///< pose fix position std
+  double fix_yaw_noise_rad = 0.001;          ///< pose fix yaw std
 };
 
 enum class EkfResult : unsigned char {
   kOk = 0,
-  kNonFinite = 1,    ///< an input was not finite; state unchanged
-  kNotPsd = 2,       ///< the covariance lost positive semi-definiteness
+  kNonFinite = 1,  ///< an input was not finite; state unchanged
+  kNotPsd = 2,     ///< the covariance lost positive semi-definiteness
 };
 
 class PoseEkf {

@@ -60,7 +60,7 @@ struct Point2 {
 
 /// Least-squares line over `count` points: y = a x + b, or x = a y + b when `x_of_y`.
 struct LineFit {
-  bool ok = false;      ///< false when the normal equations are singular (all abscissae equal)
+  bool ok = false;  ///< false when the normal equations are singular (all abscissae equal)
   bool x_of_y = false;
   double a = 0.0;
   double b = 0.0;
