@@ -10,6 +10,8 @@
 #include "swivel/config/config_error.hpp"
 #include "swivel/daemon/daemon_config.hpp"
 
+// The entry point libFuzzer names.
+// NOLINTNEXTLINE(readability-identifier-naming)
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   // The parser opens whatever robot_model names; keep the fuzzer out of the rest of the

@@ -39,9 +39,9 @@ enum : std::uint16_t { kCdrBe = 0x0000, kCdrLe = 0x0001, kCdr2Be = 0x0006, kCdr2
 
 void check_command(const swivel::VelocityCommand& c, double vx, double vy, double wz) {
   // The loop rejects non-finite twists itself; here the values must pass through bit-exact.
-  if (std::memcmp(&c.twist.vx_mps, &vx, sizeof vx) != 0 ||
-      std::memcmp(&c.twist.vy_mps, &vy, sizeof vy) != 0 ||
-      std::memcmp(&c.twist.wz_radps, &wz, sizeof wz) != 0) {
+  const auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  if (bits(c.twist.vx_mps) != bits(vx) || bits(c.twist.vy_mps) != bits(vy) ||
+      bits(c.twist.wz_radps) != bits(wz)) {
     swivel::fuzz::contract_broken(kTarget, "command twist altered in conversion");
   }
 }
@@ -110,6 +110,8 @@ void convert(int topic, const void* sample) {
 
 }  // namespace
 
+// The entry point libFuzzer names.
+// NOLINTNEXTLINE(readability-identifier-naming)
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 5) return 0;
   const dds_topic_descriptor_t* descriptors[] = {

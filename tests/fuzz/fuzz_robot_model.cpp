@@ -45,6 +45,8 @@ bool same(const swivel::RobotModel& a, const swivel::RobotModel& b) {
 
 }  // namespace
 
+// The entry point libFuzzer names.
+// NOLINTNEXTLINE(readability-identifier-naming)
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   swivel::RobotModel model;

@@ -36,6 +36,8 @@ bool same(const swivel::RunLogSample& a, const swivel::RunLogSample& b, std::siz
 
 }  // namespace
 
+// The entry point libFuzzer names.
+// NOLINTNEXTLINE(readability-identifier-naming)
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   swivel::RunLog log;

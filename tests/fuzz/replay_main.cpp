@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+// The entry point libFuzzer names.
+// NOLINTNEXTLINE(readability-identifier-naming)
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
 namespace {

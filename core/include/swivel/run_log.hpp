@@ -109,8 +109,12 @@ class RunLogWriter {
   /// Writes to a stream the caller keeps alive. @throws RunLogError as above.
   RunLogWriter(std::ostream& out, const RunLogHeader& header);
 
+  ~RunLogWriter() = default;
   RunLogWriter(const RunLogWriter&) = delete;
   RunLogWriter& operator=(const RunLogWriter&) = delete;
+  // out_ may point into file_: a moved writer would write to the old one's stream.
+  RunLogWriter(RunLogWriter&&) = delete;
+  RunLogWriter& operator=(RunLogWriter&&) = delete;
 
   /// Appends one row. @throws RunLogError when the stream fails.
   void write(const RunLogSample& sample);
