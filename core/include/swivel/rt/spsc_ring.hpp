@@ -27,6 +27,7 @@ class SpscRing {
 
  public:
   SpscRing() noexcept = default;
+  ~SpscRing() = default;
   SpscRing(const SpscRing&) = delete;
   SpscRing& operator=(const SpscRing&) = delete;
 
