@@ -75,6 +75,10 @@ SensorInputs::SensorInputs(dds_entity_t participant, Ros2Options ros2, SensorCal
   // Best effort matches best-effort and reliable writers alike; a sensor stream wants the
   // newest sample, not a retransmitted old one.
   const QosPtr qos = best_effort_qos(kTakeBatch);
+  // Plain CDR (XCDR1) only, as ROS 2 sends it: Cyclone 0.10.2's XCDR2 normaliser reads past
+  // the end of a short Imu_ body (fuzz_dds_samples), so a writer offering XCDR2 must not match.
+  const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
+  dds_qset_data_representation(qos.get(), 1, xcdr1);
   const auto reader = [&](const dds_topic_descriptor_t* desc, const std::string& name) {
     const dds_entity_t topic = create_topic(participant, desc, name.c_str());
     return check(dds_create_reader(participant, topic, qos.get(), nullptr),
