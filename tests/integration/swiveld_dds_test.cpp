@@ -217,12 +217,9 @@ TEST(SwiveldDds, EditingTheConfigurationSwapsLocalizationWithoutGapOrJump) {
   ASSERT_EQ(daemon.states(1).size(), 1u) << daemon.process().err();
 
   Child stream(swivelctl_exe(), daemon.ctl_robot({"echo", "state", "--json"}));
-  // A window without a swap, then one of the same length with the swap: the overrun
-  // counts compare like with like.
-  const json d0 = daemon.diagnostics();
-  std::this_thread::sleep_for(Seconds(2));
-  const json d1 = daemon.diagnostics();
-
+  // What the swap costs the loop in time is measured by `swivel-bench swap`; this test
+  // checks what a client sees: no gap, no jump, the new plugin named in the stream.
+  std::this_thread::sleep_for(Seconds(1));  // the stream shows raw_eg before the swap
   DaemonSetup kalman = setup;
   kalman.localization = "kalman";
   kalman.localization_params = "{mode: ekf}";
@@ -230,7 +227,7 @@ TEST(SwiveldDds, EditingTheConfigurationSwapsLocalizationWithoutGapOrJump) {
   ASSERT_TRUE(daemon.process().wait_for_err("applied localization raw_eg -> kalman", Seconds(10)))
       << daemon.process().err();
   std::this_thread::sleep_for(Seconds(2));
-  const json d2 = daemon.diagnostics();
+  const json diagnostics = daemon.diagnostics();
   stream.signal(SIGINT);
   stream.wait_for(Seconds(5));
 
@@ -263,11 +260,8 @@ TEST(SwiveldDds, EditingTheConfigurationSwapsLocalizationWithoutGapOrJump) {
   ASSERT_GT(first_kalman, 0u) << "the active plugin never changed in the stream";
   EXPECT_EQ(samples.back()["localization_plugin"], "kalman");
 
-  const auto overruns = [](const json& d) { return d["overruns"].get<std::uint64_t>(); };
-  EXPECT_LE(overruns(d2) - overruns(d1), overruns(d1) - overruns(d0) + 1)
-      << "overruns during the swap window beyond those of a window without swap";
-  EXPECT_EQ(d2["plugins"]["localization"], "kalman");
-  EXPECT_TRUE(d2["last_reload_ok"].get<bool>());
+  EXPECT_EQ(diagnostics["plugins"]["localization"], "kalman");
+  EXPECT_TRUE(diagnostics["last_reload_ok"].get<bool>());
 }
 
 TEST(SwiveldDds, BrokenConfigurationIsRejectedAndTheDaemonKeepsRunning) {
