@@ -7,6 +7,9 @@
 
 namespace swivel {
 
+/// Nanoseconds in a second, for timespec arithmetic.
+inline constexpr std::int64_t kNsPerS = 1'000'000'000;
+
 /// CLOCK_MONOTONIC now, nanoseconds. Real-time safe (vDSO, no system call on Linux).
 std::int64_t monotonic_ns() noexcept;
 

@@ -8,7 +8,7 @@ namespace swivel {
 std::int64_t monotonic_ns() noexcept {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
 }
 
 double monotonic_s() noexcept { return static_cast<double>(monotonic_ns()) * 1e-9; }

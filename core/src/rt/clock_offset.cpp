@@ -6,10 +6,10 @@
 #include <cmath>
 #include <limits>
 
+#include "swivel/clock.hpp"
+
 namespace swivel::rt {
 namespace {
-
-constexpr std::int64_t kNsPerS = 1'000'000'000;
 
 std::int64_t read_ns(clockid_t clock) noexcept {
   timespec ts{};

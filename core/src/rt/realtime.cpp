@@ -10,10 +10,10 @@
 #include <cerrno>
 #include <cstring>
 
+#include "swivel/clock.hpp"
+
 namespace swivel::rt {
 namespace {
-
-constexpr std::int64_t kNsPerS = 1'000'000'000;
 
 std::string errno_text(int error) { return std::strerror(error); }
 
