@@ -212,6 +212,9 @@ TEST(DaemonRequests, SetPoseGoesThroughTheActiveLocalizationOrIsRefusedWithItsRe
   EXPECT_EQ(reply.text,
             "pose set to x=2.000 m y=-1.000 m yaw=0.500 rad, uncertainty kept "
             "(localization raw_eg)");
+  // The reply comes from inside the cycle that set the pose, before that cycle publishes its
+  // state: the snapshot two cycles on carries it.
+  wait_cycles(*daemon.loop(), 2);
   const Pose2 now = daemon.loop()->latest().estimate.pose;
   EXPECT_NEAR(now.x_m, 2.0, 1e-6);  // standing still
   EXPECT_NEAR(now.y_m, -1.0, 1e-6);
