@@ -2,7 +2,8 @@
 // The real plugins (sim, the robot's drivetrain, raw_eg, then kalman and lsm swapped in),
 // loaded through PluginLoader as the daemon loads them, on a ControlLoop driven by
 // run_cycle() on a dedicated thread, for both robots (docent: differential; swpc4: four
-// powered casters): over more than 10,000 cycles with three hot swaps, that thread makes no
+// powered casters): over more than 10,000 cycles with three hot swaps and a robot-model swap
+// (a new drivetrain and localization, taken with the robot at rest), that thread makes no
 // heap allocation, and the pose stays continuous across each swap.
 
 #include <gtest/gtest.h>
@@ -22,7 +23,9 @@ namespace {
 
 constexpr double kRateHz = 1000.0;
 constexpr double kSpeedMps = 0.3;
-constexpr std::uint64_t kCycles = 12000;
+constexpr std::uint64_t kCycles = 14000;
+// The new model's speed limit, below the commanded kSpeedMps: its effect is measurable.
+constexpr double kNewModelSpeedLimitMps = 0.2;
 constexpr std::uint64_t kWarmUpCycles = 200;
 
 std::string source_dir() {
@@ -67,6 +70,8 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   rt::ControlLoop loop(options, *hardware, *drivetrain, *localization, "raw_eg");
 
   std::atomic<bool> swaps_done{false};
+  std::atomic<bool> hold_still{false};  // the swapping thread wants the robot at rest
+  double fastest_after_model_swap_mps = 0.0;
   HeapCounts counts;
   double max_step_m = 0.0;
   std::uint64_t cycles_armed = 0;
@@ -77,8 +82,9 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
     // This thread is the command source too (single producer), on the loop's synthetic time.
     auto cycle = [&] {
       VelocityCommand command;
-      command.twist.vx_mps = kSpeedMps;
-      command.twist.wz_radps = 0.1;
+      const bool still = hold_still.load(std::memory_order_acquire);
+      command.twist.vx_mps = still ? 0.0 : kSpeedMps;
+      command.twist.wz_radps = still ? 0.0 : 0.1;
       command.received_s = t;
       command.sequence = ++sequence;
       loop.push_command(command);
@@ -101,6 +107,10 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
         max_step_m =
             std::max(max_step_m, std::hypot(pose.x_m - previous.x_m, pose.y_m - previous.y_m));
         swaps_seen = s.localization_swaps;
+      }
+      if (s.model_swaps > 0) {
+        fastest_after_model_swap_mps =
+            std::max(fastest_after_model_swap_mps, std::abs(s.command_twist.vx_mps));
       }
       previous = pose;
       ++i;
@@ -137,6 +147,46 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
     localization = std::move(next);  // destroys the retired instance here, off the loop
     EXPECT_STREQ(loop.latest().localization_plugin.data(), swap.name);
   }
+
+  // A new robot model (the same geometry with a speed limit): a drivetrain and a
+  // localization built for it off the loop, taken together at a cycle where the robot is at
+  // rest, the outgoing pair destroyed here.
+  RobotModel limited = robot;
+  limited.limits.linear_velocity_mps = kNewModelSpeedLimitMps;
+  while (loop.latest().cycle < kWarmUpCycles + 10000) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  rt::LoopSwap model_swap;
+  auto next_drivetrain = make<Drivetrain>(loader, GetParam().drivetrain, "{}", limited);
+  auto next_localization =
+      make<Localization>(loader, "raw_eg", "{heading_source: encoders}", limited);
+  next_localization->reset(loop.latest().estimate);
+  model_swap.localization = next_localization.get();
+  rt::copy_text("raw_eg", model_swap.localization_name);
+  model_swap.drivetrain = next_drivetrain.get();
+  model_swap.model = rt::model_settings(limited);
+  ASSERT_TRUE(loop.request_swap(&model_swap));
+  // Not taken while the robot drives.
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_TRUE(loop.swap_pending());
+  EXPECT_EQ(loop.latest().model_swaps, 0u);
+  hold_still.store(true, std::memory_order_release);
+  rt::LoopSwap* retired = loop.take_retired_swap();
+  for (int i = 0; i < 10000 && retired == nullptr; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    retired = loop.take_retired_swap();
+  }
+  ASSERT_EQ(retired, &model_swap) << "the loop never took the model swap at rest";
+  EXPECT_TRUE(model_swap.outcome.taken) << model_swap.outcome.refusal.data();
+  EXPECT_EQ(model_swap.drivetrain, drivetrain.get());  // the outgoing pair came back
+  EXPECT_EQ(model_swap.localization, localization.get());
+  drivetrain = std::move(next_drivetrain);  // destroys the outgoing instances off the loop
+  localization = std::move(next_localization);
+  hold_still.store(false, std::memory_order_release);
+  // Driving again under the new model before the loop thread may end.
+  while (loop.latest().model_swaps == 0 || loop.latest().command_twist.vx_mps == 0.0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   swaps_done.store(true, std::memory_order_release);
   loop_thread.join();
 
@@ -145,7 +195,10 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
       << "first allocation: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0u);
   const StateSnapshot last = loop.latest();
-  EXPECT_EQ(last.localization_swaps, 3u);
+  EXPECT_EQ(last.localization_swaps, 4u);
+  EXPECT_EQ(last.model_swaps, 1u);
+  // The new model's limits apply: the 0.3 m/s command is held at its speed limit.
+  EXPECT_NEAR(fastest_after_model_swap_mps, kNewModelSpeedLimitMps, 1e-9);
   EXPECT_EQ(last.fault, FaultCode::kNone) << fault_code_name(last.fault);
   // Continuous pose across the swaps: no step larger than one cycle's travel plus noise.
   EXPECT_LT(max_step_m, kSpeedMps / kRateHz + 1e-3);

@@ -124,13 +124,23 @@ void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noex
           : 0.0;
 }
 
+ModelSettings model_settings(const RobotModel& robot) noexcept {
+  LoopOptions options;
+  set_encoder_resolutions(robot, options);
+  ModelSettings model;
+  model.limits = robot.limits;
+  model.wheel_encoder_resolution_rad = options.wheel_encoder_resolution_rad;
+  model.steer_encoder_resolution_rad = options.steer_encoder_resolution_rad;
+  return model;
+}
+
 ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetrain& drivetrain,
                          Localization& localization, const char* localization_name)
     : options_(options),
       period_s_(1.0 / options.rate_hz),
       period_ns_(std::llround(1e9 / options.rate_hz)),
       hardware_(hardware),
-      drivetrain_(drivetrain),
+      drivetrain_(&drivetrain),
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
       active_localization_(&localization),
       timing_(1.0 / options.rate_hz),
@@ -273,21 +283,54 @@ bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample,
 
 bool ControlLoop::push_gyro(const GyroSample& sample) noexcept { return gyro_.try_push(sample); }
 
-bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
-  if (next == nullptr) return false;
-  if (pending_localization_.load(std::memory_order_acquire) != nullptr) return false;
-  if (retired_localization_.load(std::memory_order_acquire) != nullptr) return false;
-  copy_text(name, pending_name_);
-  pending_localization_.store(next, std::memory_order_release);
+bool ControlLoop::request_swap(LoopSwap* swap) noexcept {
+  if (swap == nullptr || swap->localization == nullptr) return false;
+  bool idle = false;
+  if (!swap_in_flight_.compare_exchange_strong(idle, true, std::memory_order_acq_rel)) {
+    return false;
+  }
+  swap->outcome = SwapOutcome{};
+  pending_swap_.store(swap, std::memory_order_release);
   return true;
 }
 
-Localization* ControlLoop::take_retired_localization(SwapOutcome* outcome) noexcept {
-  Localization* retired = retired_localization_.exchange(nullptr, std::memory_order_acq_rel);
-  // Written by the loop before it published `retired`; the next swap cannot be requested
-  // before this thread took it.
-  if (retired != nullptr && outcome != nullptr) *outcome = retired_outcome_swap_;
+LoopSwap* ControlLoop::take_retired_swap() noexcept {
+  LoopSwap* retired = retired_swap_.exchange(nullptr, std::memory_order_acq_rel);
+  if (retired != nullptr) swap_in_flight_.store(false, std::memory_order_release);
   return retired;
+}
+
+bool ControlLoop::withdraw_swap(LoopSwap* swap) noexcept {
+  for (;;) {
+    LoopSwap* expected = swap;
+    if (pending_swap_.compare_exchange_strong(expected, nullptr, std::memory_order_acq_rel)) {
+      swap_in_flight_.store(false, std::memory_order_release);
+      return true;
+    }
+    if (retired_swap_.load(std::memory_order_acquire) == swap ||
+        !swap_in_flight_.load(std::memory_order_acquire)) {
+      return false;
+    }
+    // The loop is examining it at this very cycle boundary: it puts it back or retires it.
+    const timespec pause{0, 20000};
+    nanosleep(&pause, nullptr);
+  }
+}
+
+bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
+  // The slot is the loop's own; it is free whenever no swap is in flight.
+  if (next == nullptr || swap_in_flight_.load(std::memory_order_acquire)) return false;
+  localization_only_swap_ = LoopSwap{};
+  localization_only_swap_.localization = next;
+  copy_text(name, localization_only_swap_.localization_name);
+  return request_swap(&localization_only_swap_);
+}
+
+Localization* ControlLoop::take_retired_localization(SwapOutcome* outcome) noexcept {
+  LoopSwap* retired = take_retired_swap();
+  if (retired == nullptr) return nullptr;
+  if (outcome != nullptr) *outcome = retired->outcome;
+  return retired->localization;
 }
 
 void ControlLoop::request_clear(std::uint64_t id) noexcept {
@@ -495,39 +538,92 @@ void ControlLoop::write_zero_setpoints() noexcept {
   setpoints_.module_count = module_count_;
 }
 
+// A swap at the cycle boundary. One with a new robot model waits for a cycle at rest: a
+// drivetrain swapped under a moving robot would change its setpoints mid-motion.
 void ControlLoop::take_pending_swap(double now_s) noexcept {
-  Localization* next = pending_localization_.load(std::memory_order_acquire);
-  if (next == nullptr) return;
-  Localization* outgoing = active_localization_.load(std::memory_order_relaxed);
-  const PoseEstimate handed = outgoing->estimate();
-  const char* thrown = nullptr;
-  const Status status = guarded([&] { return next->hand_over(handed); }, thrown);
-  if (status != Status::kOk) {
-    // Roll back: the outgoing instance still holds a valid estimate and stays active; the
-    // refused one goes back to the swapping thread. No fault: the robot lost nothing.
-    retired_outcome_swap_.taken = false;
-    copy_text(thrown != nullptr ? thrown : next->last_error(), retired_outcome_swap_.refusal);
-    if (retired_outcome_swap_.refusal[0] == '\0') {
-      copy_text("hand_over failed without a reason", retired_outcome_swap_.refusal);
-    }
-    retired_localization_.store(next, std::memory_order_release);
-    pending_localization_.store(nullptr, std::memory_order_release);
-    log_event(LogLevel::kWarn, LogCode::kLocalizationSwapRefused, now_s, "",
-              static_cast<double>(state_.localization_swaps), 0.0, 0.0, 0.0,
-              retired_outcome_swap_.refusal.data());
+  LoopSwap* swap = pending_swap_.exchange(nullptr, std::memory_order_acq_rel);
+  if (swap == nullptr) return;
+  if (swap->drivetrain != nullptr && !at_rest()) {
+    pending_swap_.store(swap, std::memory_order_release);  // again next cycle, or withdrawn
     return;
   }
-  retired_outcome_swap_.taken = true;
-  retired_outcome_swap_.refusal[0] = '\0';
-  active_localization_.exchange(next, std::memory_order_acq_rel);
-  state_.localization_plugin = pending_name_;
+  Localization* outgoing = active_localization_.load(std::memory_order_relaxed);
+  Localization* incoming = swap->localization;
+  const PoseEstimate handed = outgoing->estimate();
+  const char* thrown = nullptr;
+  const char* refusal = nullptr;
+  if (swap->drivetrain != nullptr && swap->drivetrain->module_count() != module_count_) {
+    refusal = "the new drivetrain drives a different number of modules";
+  } else if (guarded([&] { return incoming->hand_over(handed); }, thrown) != Status::kOk) {
+    refusal = thrown != nullptr ? thrown : incoming->last_error();
+    if (refusal == nullptr || refusal[0] == '\0') refusal = "hand_over failed without a reason";
+  }
+  if (refusal != nullptr) {
+    // Roll back: the outgoing instances still hold a valid estimate and stay active; the
+    // refused ones go back to the swapping thread. No fault: the robot lost nothing.
+    swap->outcome.taken = false;
+    copy_text(refusal, swap->outcome.refusal);
+    retired_swap_.store(swap, std::memory_order_release);
+    log_event(LogLevel::kWarn, LogCode::kLocalizationSwapRefused, now_s, "",
+              static_cast<double>(state_.localization_swaps), 0.0, 0.0, 0.0,
+              swap->outcome.refusal.data());
+    return;
+  }
+  swap->outcome.taken = true;
+  swap->outcome.refusal[0] = '\0';
+  active_localization_.store(incoming, std::memory_order_release);
+  swap->localization = outgoing;
+  state_.localization_plugin = swap->localization_name;
   ++state_.localization_swaps;
-  // request_localization_swap() refuses while this slot is full, so it is empty here.
-  retired_localization_.store(outgoing, std::memory_order_release);
-  pending_localization_.store(nullptr, std::memory_order_release);
+  if (swap->drivetrain != nullptr) {
+    Drivetrain* replaced = drivetrain_;
+    drivetrain_ = swap->drivetrain;
+    swap->drivetrain = replaced;
+    apply_model(swap->model);
+    ++state_.model_swaps;
+    log_event(LogLevel::kInfo, LogCode::kMessage, now_s, "robot model swapped at rest",
+              static_cast<double>(state_.model_swaps));
+  }
+  // request_swap() refuses while a swap is in flight, so this slot is empty here.
+  retired_swap_.store(swap, std::memory_order_release);
   log_event(LogLevel::kInfo, LogCode::kLocalizationSwapped, now_s, "",
             static_cast<double>(state_.localization_swaps), handed.pose.x_m, handed.pose.y_m,
             handed.pose.yaw_rad, state_.localization_plugin.data());
+}
+
+// At rest: the last cycle commanded zero and wrote zero setpoints, no calibration drives
+// the actuators, and the encoders measured every wheel and steering rate below
+// kAtRestJointRateRadps (no measurement, e.g. after a failed reading, is not at rest).
+bool ControlLoop::at_rest() const noexcept {
+  if (active_calibration_.load(std::memory_order_relaxed) != nullptr) return false;
+  if (!last_write_zero_ || !state_.has_joint_rates) return false;
+  const Twist2& command = state_.command_twist;
+  if (command.vx_mps != 0.0 || command.vy_mps != 0.0 || command.wz_radps != 0.0) return false;
+  for (std::uint32_t i = 0; i < module_count_; ++i) {
+    if (!(std::abs(state_.wheel_rate_radps[i]) < kAtRestJointRateRadps) ||
+        !(std::abs(state_.steer_rate_radps[i]) < kAtRestJointRateRadps)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The new model's limits and encoder resolutions. The robot is at rest: both limiters start
+// again from zero, and the twist window from the next reading on.
+void ControlLoop::apply_model(const ModelSettings& model) noexcept {
+  options_.limits = model.limits;
+  options_.wheel_encoder_resolution_rad = model.wheel_encoder_resolution_rad;
+  options_.steer_encoder_resolution_rad = model.steer_encoder_resolution_rad;
+  command_limiter_ = motion::TwistLimiter(options_.limits);
+  stop_limiter_ = motion::TwistLimiter(stop_limits(options_));
+  command_limiter_.reset();
+  stop_limiter_.reset();
+  limiter_ = &stop_limiter_;
+  if (!twist_window_.set_resolutions(model.wheel_encoder_resolution_rad,
+                                     model.steer_encoder_resolution_rad)) {
+    (void)twist_window_.set_resolutions(0.0, 0.0);  // unknown: no covariance
+  }
+  twist_window_.reset();
 }
 
 void ControlLoop::take_pending_calibration(double now_s) noexcept {
@@ -807,12 +903,12 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   }
   if (reading_ok && has_previous_) {
     // A refusal here is no fault: the cycle's own forward() below decides that.
-    twist_ok = guarded([&] { return twist_window_.estimate(drivetrain_, twist_estimate_); },
+    twist_ok = guarded([&] { return twist_window_.estimate(*drivetrain_, twist_estimate_); },
                        thrown) == Status::kOk;
-    if (guarded([&] { return drivetrain_.forward(previous_, current_, odometry); }, thrown) !=
+    if (guarded([&] { return drivetrain_->forward(previous_, current_, odometry); }, thrown) !=
         Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
-                  thrown != nullptr ? thrown : drivetrain_.last_error());
+                  thrown != nullptr ? thrown : drivetrain_->last_error());
       // An encoder jump must not stay in the window once the fault is cleared.
       twist_window_.reset();
       twist_ok = false;
@@ -880,10 +976,10 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     // The final cycle stops at once: the daemon brings the robot to rest before it.
     const Twist2 limited = final_stop ? Twist2{} : limit(target, !moving, now_s);
     if (guarded(
-            [&] { return drivetrain_.inverse(limited, *basis, period_s_, setpoints_, applied); },
+            [&] { return drivetrain_->inverse(limited, *basis, period_s_, setpoints_, applied); },
             thrown) != Status::kOk) {
       raise_fault(FaultCode::kDrivetrainError, now_s,
-                  thrown != nullptr ? thrown : drivetrain_.last_error());
+                  thrown != nullptr ? thrown : drivetrain_->last_error());
       zeroed = true;
     } else if (!finite(setpoints_) || !finite(applied)) {
       raise_fault(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
@@ -948,7 +1044,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   state_.command_twist = applied;
   state_.gyro_wz_radps = reading_ok && current_.gyro_valid ? current_.gyro_wz_radps : 0.0;
   state_.module_count = module_count_;
-  drivetrain_.module_states(std::span<ModuleState>(state_.modules.data(), module_count_));
+  drivetrain_->module_states(std::span<ModuleState>(state_.modules.data(), module_count_));
   if (latched_fault_ != FaultCode::kNone) {
     state_.mode = LoopMode::kSafeStop;
     state_.fault = latched_fault_;

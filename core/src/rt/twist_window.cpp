@@ -36,6 +36,16 @@ void TwistWindow::reset() noexcept {
   next_ = 0;
 }
 
+bool TwistWindow::set_resolutions(double wheel_resolution_rad,
+                                  double steer_resolution_rad) noexcept {
+  if (!valid_resolution(wheel_resolution_rad) || !valid_resolution(steer_resolution_rad)) {
+    return false;
+  }
+  options_.wheel_resolution_rad = wheel_resolution_rad;
+  options_.steer_resolution_rad = steer_resolution_rad;
+  return true;
+}
+
 void TwistWindow::push(const HardwareState& reading) noexcept {
   const std::uint32_t modules = std::min(reading.module_count, kMaxModules);
   if (count_ > 0 && (!(reading.stamp_s > newest_s_) || modules != module_count_)) reset();

@@ -32,9 +32,13 @@
 // carries the active fault's code and its cause (StateSnapshot::fault_detail). A hardware
 // fault also calls Hardware::on_error() at the end of its cycle (once, until a clear).
 //
-// Hot swap: the incoming localization's hand_over() decides. kOk: it becomes active and the
-// outgoing one is retired. kError or an exception: the outgoing one stays active, the
-// incoming one is retired instead and the refusal comes back with it; no fault latches.
+// Hot swap (request_swap()): the incoming localization's hand_over() decides. kOk: it becomes
+// active and the outgoing one is retired. kError or an exception: the outgoing one stays
+// active, the incoming one is retired instead and the refusal comes back with it; no fault
+// latches. A swap that carries a new robot model (a drivetrain configured for it and the
+// model's limits and encoder resolutions) is taken only at a cycle boundary where the robot
+// is at rest (at_rest()): until then it waits, and the requester may withdraw it; the new
+// drivetrain and localization are taken together or not at all.
 //
 // Calibration: start_calibration() hands the loop a configured Calibration; from the next
 // cycle boundary the mode is kCalibration and the setpoints come from its step() (the
@@ -133,6 +137,20 @@ std::size_t twist_window_readings(const LoopOptions& options);
 /// 2 pi / counts per revolution; the steering only for an swpc robot).
 void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept;
 
+/// The robot model's share of the loop's settings: what a model swap replaces.
+struct ModelSettings {
+  MotionLimits limits;  ///< LoopOptions::limits
+  double wheel_encoder_resolution_rad = 0.0;
+  double steer_encoder_resolution_rad = 0.0;
+};
+
+/// The model's settings as the loop takes them (the limits and set_encoder_resolutions()).
+ModelSettings model_settings(const RobotModel& robot) noexcept;
+
+/// Below this every wheel and steering rate measured over the twist window, rad/s, counts
+/// as at rest for a robot-model swap (3.75 mm/s on a 75 mm wheel).
+inline constexpr double kAtRestJointRateRadps = 0.1;
+
 /// How a hot swap the loop took ended (take_retired_localization()).
 struct SwapOutcome {
   /// True: the incoming instance became active and the outgoing one was retired. False: the
@@ -140,6 +158,21 @@ struct SwapOutcome {
   /// was retired instead.
   bool taken = true;
   FaultDetail refusal{};  ///< why it refused: its last_error() or the loop's text
+};
+
+/// A hot swap handed to the loop with request_swap(): a new localization and, for a new
+/// robot model, a new drivetrain with the model's loop settings. The requester owns it and
+/// leaves it alone from request_swap() until take_retired_swap() or withdraw_swap() gives it
+/// back. The loop writes into it what it let go of: after a taken swap the pointers hold the
+/// outgoing instances, after a refused one still the incoming ones (`outcome` says which).
+struct LoopSwap {
+  Localization* localization = nullptr;  ///< configured and reset off the loop; never null
+  ShortName localization_name{};
+  /// Configured for the new model off the loop, with as many modules as the running one;
+  /// null keeps the running drivetrain and `model` is ignored. Taken only at rest.
+  Drivetrain* drivetrain = nullptr;
+  ModelSettings model;
+  SwapOutcome outcome;  ///< written by the loop when it lets go of the swap
 };
 
 /// The loop's answer to request_clear() or request_set_pose().
@@ -237,22 +270,38 @@ class ControlLoop {
   /// Any thread. The histograms behind timing(), e.g. for publishing them as diagnostics.
   [[nodiscard]] const TimingStats& timing_stats() const noexcept { return timing_; }
 
-  /// The swapping thread only. Real-time safe. Asks the loop to take `next` (configured and
-  /// reset off the loop) at its next cycle boundary; the loop calls next->hand_over() with
-  /// the outgoing estimate so that the pose is continuous. False when a swap is pending or
-  /// the previous outgoing instance has not been taken with take_retired_localization().
-  /// `name` is copied (truncated to ShortName).
+  /// The swapping thread only. Real-time safe. Asks the loop to take `swap` at a cycle
+  /// boundary (the next one; with a drivetrain, the first one at rest): it calls
+  /// swap->localization->hand_over() with the outgoing estimate, so that the pose is
+  /// continuous, and on success makes the incoming instances active. False for null, a null
+  /// localization, or while an earlier swap has not been given back (take_retired_swap(),
+  /// withdraw_swap()).
+  bool request_swap(LoopSwap* swap) noexcept;
+
+  /// The swapping thread only. Real-time safe. The swap the loop let go of (taken or
+  /// refused, see LoopSwap), or nullptr while there is none; the instances it holds will
+  /// never be called again: destroy and unload them.
+  LoopSwap* take_retired_swap() noexcept;
+
+  /// The swapping thread only. Not real-time safe: may wait for the cycle boundary under
+  /// way. Takes back `swap` when the loop has not taken it yet (true: it never will, and its
+  /// instances were never called). False when the loop already let go of it or is doing so:
+  /// take_retired_swap() then returns it.
+  bool withdraw_swap(LoopSwap* swap) noexcept;
+
+  /// request_swap() of a new localization alone. `name` is copied (truncated to ShortName).
   bool request_localization_swap(Localization* next, const char* name) noexcept;
 
-  /// The swapping thread only. Real-time safe. The instance the loop let go of in the last
-  /// swap (it will never be called again: destroy and unload it), or nullptr: the outgoing
-  /// instance, or the incoming one when it refused the hand-over. `outcome` (optional) says
-  /// which.
+  /// The localization instance of the swap the loop let go of (take_retired_swap()), or
+  /// nullptr: the outgoing instance, or the incoming one when it refused the hand-over.
+  /// `outcome` (optional) says which.
   Localization* take_retired_localization(SwapOutcome* outcome = nullptr) noexcept;
 
-  /// Any thread. Real-time safe. True while a requested swap has not been taken.
+  /// Any thread. Real-time safe. True while a requested swap has not been taken, refused or
+  /// withdrawn.
   [[nodiscard]] bool swap_pending() const noexcept {
-    return pending_localization_.load(std::memory_order_acquire) != nullptr;
+    return swap_in_flight_.load(std::memory_order_acquire) &&
+           retired_swap_.load(std::memory_order_acquire) == nullptr;
   }
 
   /// Any thread. The localization the loop is using now. Real-time safe.
@@ -354,6 +403,8 @@ class ControlLoop {
   void thread_main(std::promise<std::string>& scheduling_warning) noexcept;
   void cycle(double now_s, bool final_stop) noexcept;
   void take_pending_swap(double now_s) noexcept;
+  [[nodiscard]] bool at_rest() const noexcept;
+  void apply_model(const ModelSettings& model) noexcept;
   void take_pending_calibration(double now_s) noexcept;
   bool step_calibration(double now_s, bool final_stop) noexcept;
   void retire_calibration(CalibrationOutcome outcome, double now_s) noexcept;
@@ -382,7 +433,7 @@ class ControlLoop {
   double period_s_;
   std::int64_t period_ns_;
   Hardware& hardware_;
-  Drivetrain& drivetrain_;
+  Drivetrain* drivetrain_;  // the loop's; replaced by a model swap
   std::uint32_t module_count_;
 
   // Cross-thread state.
@@ -390,9 +441,11 @@ class ControlLoop {
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> clear_requested_{false};
   std::atomic<Localization*> active_localization_;
-  std::atomic<Localization*> pending_localization_{nullptr};
-  std::atomic<Localization*> retired_localization_{nullptr};
-  ShortName pending_name_{};  // written before pending_localization_ is published
+  // A swap in flight: requested (pending), examined by the loop (neither), let go (retired).
+  std::atomic<bool> swap_in_flight_{false};  // from request_swap() until given back
+  std::atomic<LoopSwap*> pending_swap_{nullptr};
+  std::atomic<LoopSwap*> retired_swap_{nullptr};
+  LoopSwap localization_only_swap_{};  // request_localization_swap()'s
   std::atomic<Calibration*> pending_calibration_{nullptr};
   std::atomic<Calibration*> active_calibration_{nullptr};  // written by the loop only
   std::atomic<Calibration*> retired_calibration_{nullptr};
@@ -412,8 +465,6 @@ class ControlLoop {
   };
   LatestValue<LoopRequest> requests_;
   LatestValue<LoopReply> replies_;
-  // Written by the loop before it publishes a refused instance in retired_localization_.
-  SwapOutcome retired_outcome_swap_{};
   LatestValue<VelocityCommand> commands_;
   struct MotionCaptureInput {
     MotionCaptureSample sample;

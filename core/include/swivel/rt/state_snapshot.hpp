@@ -91,6 +91,7 @@ struct StateSnapshot {
   std::uint64_t fault_count = 0;         ///< faults raised since start
   ShortName localization_plugin{};       ///< active localization plugin
   std::uint64_t localization_swaps = 0;  ///< hot swaps taken by the loop
+  std::uint64_t model_swaps = 0;         ///< robot-model swaps (new drivetrain) among them
   bool has_truth = false;                ///< simulation: the true pose is known
   Pose2 truth;
   /// The cycle's raw hardware reading (for run logs): cumulative encoder angles, rad, and

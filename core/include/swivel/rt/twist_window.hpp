@@ -67,6 +67,10 @@ class TwistWindow {
   /// Real-time safe. Forgets every reading.
   void reset() noexcept;
 
+  /// Real-time safe. New encoder resolutions (a robot-model swap) for the covariance from
+  /// the next estimate on; false (nothing changes) for one that is negative or not finite.
+  bool set_resolutions(double wheel_resolution_rad, double steer_resolution_rad) noexcept;
+
   /// Real-time safe. Adds one finite reading. A reading that is not later than the newest,
   /// or has another module count, starts the window afresh.
   void push(const HardwareState& reading) noexcept;
