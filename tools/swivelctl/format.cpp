@@ -108,6 +108,7 @@ nlohmann::json to_json(const swivel_msg_Diagnostics& s) {
            {{"hardware", str(s.hardware_plugin)},
             {"drivetrain", str(s.drivetrain_plugin)},
             {"localization", str(s.localization_plugin)}}},
+          {"robot_model", str(s.robot_model)},
           {"reload_count", s.reload_count},
           {"last_reload_ok", s.last_reload_ok},
           {"last_reload_result", str(s.last_reload_result)},
@@ -157,14 +158,15 @@ std::string to_line(const swivel_msg_Diagnostics& s) {
   return format(
       "%s rate=%.1f/%.1fHz lateness p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus "
       "cycle p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus overruns=%llu fault=%s%s%s%s faults=%llu "
-      "plugins=%s/%s/%s reloads=%u last_reload=%s%s",
+      "plugins=%s/%s/%s model=%s reloads=%u last_reload=%s%s",
       str(s.robot_id).c_str(), s.measured_rate_hz, s.loop_rate_hz, s.lateness.p50_us,
       s.lateness.p99_us, s.lateness.p999_us, s.lateness.max_us, s.cycle_time.p50_us,
       s.cycle_time.p99_us, s.cycle_time.p999_us, s.cycle_time.max_us,
       static_cast<unsigned long long>(s.overruns), str(s.fault_text).c_str(),
       detail_open(s.fault_detail), str(s.fault_detail).c_str(), detail_close(s.fault_detail),
       static_cast<unsigned long long>(s.fault_count), str(s.hardware_plugin).c_str(),
-      str(s.drivetrain_plugin).c_str(), str(s.localization_plugin).c_str(), s.reload_count,
+      str(s.drivetrain_plugin).c_str(), str(s.localization_plugin).c_str(),
+      str(s.robot_model).c_str(), s.reload_count,
       s.reload_count == 0 ? "-" : (s.last_reload_ok ? "ok" : "rejected"),
       s.restart_required ? " (restart required)" : "");
 }

@@ -494,6 +494,7 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.hardware_plugin = c_str(d.hardware_plugin);
   msg.drivetrain_plugin = c_str(d.drivetrain_plugin);
   msg.localization_plugin = c_str(d.localization_plugin);
+  msg.robot_model = c_str(d.robot_model);
   msg.reload_count = d.reload_count;
   msg.last_reload_ok = d.last_reload_ok;
   msg.last_reload_result = c_str(d.last_reload_result);
@@ -546,6 +547,7 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
       {"hardware_plugin", d.hardware_plugin},
       {"drivetrain_plugin", d.drivetrain_plugin},
       {"localization_plugin", d.localization_plugin},
+      {"robot_model", d.robot_model},
       {"commands_received", std::to_string(commands_received_.load(std::memory_order_relaxed))},
       {"commands_dropped", std::to_string(commands_dropped_.load(std::memory_order_relaxed))},
       {"commands_stale", std::to_string(commands_stale_.load(std::memory_order_relaxed))},

@@ -15,6 +15,11 @@ void ReloadRecord::record(const ReloadResult& result) {
   if (result.ok) summary_.restart_required = result.restart_required;
 }
 
+void ReloadRecord::set_robot_model(const std::string& path) {
+  const std::lock_guard lock(mutex_);
+  summary_.robot_model = path;
+}
+
 ReloadRecord::Summary ReloadRecord::summary() const {
   const std::lock_guard lock(mutex_);
   return summary_;
@@ -56,6 +61,7 @@ dds::DiagnosticsSample DiagnosticsSource::read() {
   d.drivetrain_plugin = drivetrain_plugin_;
   d.localization_plugin = s.localization_plugin.data();
   const ReloadRecord::Summary reloads = reloads_.summary();
+  d.robot_model = reloads.robot_model;
   d.reload_count = reloads.count;
   d.last_reload_ok = reloads.last.ok;
   d.last_reload_result = reloads.last.text;

@@ -55,6 +55,7 @@ struct DiagnosticsSample {
   std::string hardware_plugin;
   std::string drivetrain_plugin;
   std::string localization_plugin;
+  std::string robot_model;         ///< the model file in effect
   std::uint32_t reload_count = 0;  ///< configuration reloads attempted
   bool last_reload_ok = true;
   std::string last_reload_result;  ///< "" before the first reload
