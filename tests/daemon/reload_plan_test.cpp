@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "swivel/robot_model_io.hpp"
+
 namespace swivel::daemon {
 namespace {
 
@@ -96,12 +98,56 @@ TEST(ReloadPlan, EachRestartSettingIsNamed) {
   }
 }
 
-TEST(ReloadPlan, AnEditedRobotModelFileNeedsARestartUnderTheSamePath) {
-  EXPECT_EQ(plan_for(shipped(), "name: docent\n# edited\n").restart,
-            std::vector<std::string>{"robot_model"});
-  EXPECT_EQ(
-      plan_for(edited("robot_model: robots/docent.yaml", "robot_model: robots/swpc4.yaml")).restart,
-      std::vector<std::string>{"robot_model"});
+TEST(ReloadPlan, AnEditedRobotModelFileIsSwappedLiveUnderTheSamePath) {
+  const ReloadPlan edited_file = plan_for(shipped(), "name: docent\n# edited\n");
+  EXPECT_TRUE(edited_file.swap_model);
+  EXPECT_FALSE(edited_file.swap_localization);  // its slot is unchanged; the daemon rebuilds it
+  EXPECT_TRUE(edited_file.restart.empty());
+  EXPECT_FALSE(edited_file.no_live_change());
+  EXPECT_FALSE(plan_for(shipped()).swap_model);
+}
+
+TEST(ReloadPlan, AnotherRobotModelPathIsAModelSwap) {
+  // Whether the running robot can take that model is model_swap_problem()'s to say.
+  const ReloadPlan plan =
+      plan_for(edited("robot_model: robots/docent.yaml", "robot_model: robots/swpc4.yaml"), kModel);
+  EXPECT_TRUE(plan.swap_model);
+  EXPECT_TRUE(plan.restart.empty());
+}
+
+TEST(ReloadPlan, AModelChangeTogetherWithALocalizationChangeSwapsBoth) {
+  const ReloadPlan plan = plan_for(edited("plugin: raw_eg", "plugin: kalman"), "name: docent\n#\n");
+  EXPECT_TRUE(plan.swap_model);
+  EXPECT_TRUE(plan.swap_localization);
+  EXPECT_TRUE(plan.restart.empty());
+}
+
+TEST(ReloadPlan, AModelTheRunningRobotCannotTakeIsNamed) {
+  const RobotModel docent = load_robot_model(kConfigDir + "/robots/docent.yaml");
+  const RobotModel swpc4 = load_robot_model(kConfigDir + "/robots/swpc4.yaml");
+  RobotModel wider = docent;
+  wider.differential.track_width_m *= 1.04;
+  wider.differential.wheel_radius_left_m = 0.08;
+  wider.limits.linear_velocity_mps = 0.5;
+  EXPECT_EQ(model_swap_problem(docent, wider), "");
+  EXPECT_EQ(model_swap_problem(docent, docent), "");
+
+  const std::string kind = model_swap_problem(docent, swpc4);
+  EXPECT_NE(kind.find("drivetrain: swpc, but the running robot is differential"),
+            std::string::npos)
+      << kind;
+  RobotModel three = swpc4;
+  three.modules.pop_back();
+  const std::string count = model_swap_problem(swpc4, three);
+  EXPECT_NE(count.find(std::to_string(swpc4.module_count() - 1) + " modules, but the running "
+                       "robot has " + std::to_string(swpc4.module_count())),
+            std::string::npos)
+      << count;
+  RobotModel renamed = docent;
+  renamed.name = "other";
+  const std::string name = model_swap_problem(docent, renamed);
+  EXPECT_NE(name.find("name: 'other', but the running robot is 'docent'"), std::string::npos)
+      << name;
 }
 
 TEST(ReloadPlan, LiveAndRestartChangesAreReportedTogetherInReferenceOrder) {

@@ -160,7 +160,8 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
   EXPECT_NE(daemon.process().err().find("calibrated model written to " + files[0].string()),
             std::string::npos)
       << daemon.process().err();
-  EXPECT_NE(daemon.process().err().find("restart swiveld with robot_model: " + files[0].string()),
+  EXPECT_NE(daemon.process().err().find("to apply it, set robot_model: " + files[0].string() +
+                                        " and reload with the robot at rest"),
             std::string::npos);
 
   const RobotModel got = load_robot_model(files[0].string());

@@ -121,8 +121,7 @@ std::string CalibrationRunner::calibrated_model_file() const {
 std::string CalibrationRunner::apply_instructions() const {
   std::lock_guard lock(mutex_);
   if (calibrated_file_.empty()) return "no calibrated model to apply";
-  return "restart swiveld with robot_model: " + calibrated_file_ +
-         " (the running drivetrain cannot be swapped)";
+  return "set robot_model: " + calibrated_file_ + " and reload with the robot at rest";
 }
 
 void CalibrationRunner::handle_request(const std::string& argument) {
@@ -227,7 +226,8 @@ void CalibrationRunner::finish_analysis_locked() {
   calibrated_file_ = saved.path;
   set_status_locked("done",
                     "calibrated model written to " + calibrated_file_ +
-                        "; to apply it, restart swiveld with robot_model: " + calibrated_file_);
+                        "; to apply it, set robot_model: " + calibrated_file_ +
+                        " and reload with the robot at rest");
   status_.progress = 1.0;
   publish_locked();
 }

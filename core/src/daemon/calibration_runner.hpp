@@ -69,9 +69,9 @@ class CalibrationRunner {
   /// Where the last calibrated model was written ("" when none).
   [[nodiscard]] std::string calibrated_model_file() const;
 
-  /// Applying the calibrated model needs a restart of the daemon with `robot_model:` set
-  /// to calibrated_model_file() (the loop has no drivetrain swap). Returns that
-  /// instruction, or why there is nothing to apply.
+  /// The calibrated model applies with `robot_model:` set to calibrated_model_file() and a
+  /// reload with the robot at rest. Returns that instruction, or why there is nothing to
+  /// apply.
   [[nodiscard]] std::string apply_instructions() const;
 
   /// Seconds between progress samples published by poll().

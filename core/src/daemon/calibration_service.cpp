@@ -47,6 +47,8 @@ CalibrationService::CalibrationService(const DaemonConfig& config, rt::ControlLo
 
 CalibrationService::~CalibrationService() = default;
 
+bool CalibrationService::busy() const { return runner_ && runner_->status().status == "running"; }
+
 std::string CalibrationService::refusal() const {
   if (config_.robot.drivetrain != DrivetrainKind::kSwpc) {
     return std::string("refused: robot '") + config_.robot.name + "' has a " +

@@ -42,6 +42,9 @@ class CalibrationService {
   /// The runner's periodic work (progress, hand-back, analysis, writing the model).
   void poll() noexcept;
 
+  /// True while a calibration runs or its recording is analysed.
+  [[nodiscard]] bool busy() const;
+
  private:
   [[nodiscard]] std::string refusal() const;
 

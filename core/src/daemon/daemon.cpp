@@ -17,7 +17,7 @@
 #include "controlled_stop.hpp"
 #include "diagnostics.hpp"
 #include "hardware_lifecycle.hpp"
-#include "localization_swap.hpp"
+#include "hot_swap.hpp"
 #include "loop_requests.hpp"
 #include "plugin_set.hpp"
 #include "reload_plan.hpp"
@@ -40,6 +40,10 @@ std::string read_text(const std::string& path) {
   text << in.rdbuf();
   return text.str();
 }
+
+// How long a reload waits for the loop to take a swap: a localization's is taken at the next
+// cycle; a new robot model's at the first cycle with the robot at rest.
+constexpr double kSwapWaitS = 2.0;
 
 timespec to_timespec(double seconds) {
   timespec ts{};
@@ -73,11 +77,11 @@ Daemon::Daemon(DaemonConfig config, DaemonOptions options)
   }
   robot_model_text_ = read_text(config_.robot_model_path);
   status_period_s_ = config_.status_period_s;
+  reloads_->set_robot_model(config_.robot_model_path);
   PluginSet plugins = assemble_plugins(loader_, config_);
   hardware_ = std::move(plugins.hardware);
-  drivetrain_ = std::move(plugins.drivetrain);
-  localization_ =
-      std::make_unique<LocalizationSwap>(std::move(plugins.localization), config_.localization);
+  hot_swap_ = std::make_unique<HotSwap>(std::move(plugins.localization), config_.localization,
+                                        std::move(plugins.drivetrain));
   if (!(options_.record_rate_hz > 0.0 && options_.record_rate_hz <= 10000.0)) {
     throw ConfigError("--record-rate-hz: expected a rate in (0, 10000] Hz");
   }
@@ -117,8 +121,8 @@ void Daemon::start() {
   loop_options.run_sample_rate_hz = options_.dds ? dds_options_.run_samples_rate_hz : 0.0;
   rt::set_encoder_resolutions(config_.robot, loop_options);
   loop_options.external_sensors = dds::loop_sensor_options(dds_options_.ros2);
-  loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, *drivetrain_,
-                                            localization_->active(),
+  loop_ = std::make_unique<rt::ControlLoop>(loop_options, *hardware_, hot_swap_->drivetrain(),
+                                            hot_swap_->localization(),
                                             config_.localization.plugin.c_str());
   // inactive -> active, off the loop and before its first cycle.
   if (const std::string refusal = activate_hardware(*hardware_); !refusal.empty()) {
@@ -136,7 +140,7 @@ void Daemon::start() {
   spdlog::info("loop running at {} Hz: hardware {}, drivetrain {}, localization {}, robot {}",
                config_.rate_hz, config_.hardware.plugin, config_.drivetrain.plugin,
                config_.localization.plugin, config_.robot.name);
-  localization_->attach(loop_.get());
+  hot_swap_->attach(loop_.get());
   loop_requests_ = std::make_unique<LoopRequests>(*loop_, *hardware_, config_.hardware.plugin);
   calibration_ = std::make_unique<CalibrationService>(
       config_, *loop_, loader_,
@@ -166,8 +170,8 @@ void Daemon::start() {
 }
 
 void Daemon::start_bridge() {
-  diagnostics_ = std::make_unique<DiagnosticsSource>(*loop_, hardware_.name(), drivetrain_.name(),
-                                                     start_s_, *reloads_);
+  diagnostics_ = std::make_unique<DiagnosticsSource>(*loop_, hardware_.name(),
+                                                     config_.drivetrain.plugin, start_s_, *reloads_);
   dds::DdsCallbacks callbacks;
   callbacks.read_state = [this](StateSnapshot& out) {
     out = loop_->latest();
@@ -311,11 +315,11 @@ void Daemon::stop() noexcept {
   if (recorder_) recorder_->stop();
   loop_requests_.reset();
   if (loop_) {
-    (void)localization_->collect();
-    localization_->attach(nullptr);
+    (void)hot_swap_->collect();
+    hot_swap_->attach(nullptr);
     loop_.reset();
   }
-  localization_->drop_incoming();  // a swap the loop never took: the instance was never used
+  hot_swap_->drop_incoming();  // a swap the loop never took: the instances were never used
   recorder_.reset();               // flushes the run log
 }
 
@@ -327,33 +331,67 @@ ReloadResult Daemon::reload(const std::string& trigger) {
     DaemonConfig fresh = load_daemon_config(config_.file);
     dds::DdsOptions fresh_dds = dds::parse_dds_options(fresh.dds, fresh.file, fresh.config_dir);
     dds::complete_joints(fresh.robot, fresh.file, fresh_dds.ros2);
-    const ReloadPlan plan =
-        plan_reload(config_, robot_model_text_, fresh, read_text(fresh.robot_model_path));
+    std::string fresh_model_text = read_text(fresh.robot_model_path);
+    const ReloadPlan plan = plan_reload(config_, robot_model_text_, fresh, fresh_model_text);
+
+    if (plan.swap_model) {
+      if (const std::string problem = model_swap_problem(config_.robot, fresh.robot);
+          !problem.empty()) {
+        throw ConfigError(fresh.robot_model_path + ": " + problem + "; still running on " +
+                          config_.robot_model_path);
+      }
+      if (calibration_ && calibration_->busy()) {
+        throw PluginError("robot_model: a calibration is running; reload once it has ended");
+      }
+    }
 
     std::vector<std::string> applied;
-    if (plan.swap_localization) {
-      (void)localization_->collect();
-      if (localization_->busy()) {
-        throw PluginError("the previous localization swap has not completed yet; try again");
+    if (plan.swap_localization || plan.swap_model) {
+      (void)hot_swap_->collect();
+      if (hot_swap_->busy()) {
+        throw PluginError("the previous swap has not completed yet; try again");
       }
-      // Built and validated in full before anything changes; the robot model stays the one
-      // in effect (a changed model needs a restart).
-      PluginInstance<Localization> next = make_localization(
-          loader_, fresh, config_.robot, config_.period_s(), loop_->latest().estimate);
-      // Applied first: its hand-over may refuse.
+      // Built and validated in full before anything changes: for a new model, a drivetrain
+      // (the running slot) and a localization configured for it; otherwise a localization
+      // for the model in effect.
+      const RobotModel& robot = plan.swap_model ? fresh.robot : config_.robot;
+      HotSwap::Incoming next;
+      next.localization = make_localization(loader_, fresh, robot, config_.period_s(),
+                                            loop_->latest().estimate);
+      next.localization_slot = fresh.localization;
+      if (plan.swap_model) {
+        next.drivetrain = make_drivetrain(loader_, config_, fresh.robot);
+        next.model = rt::model_settings(fresh.robot);
+      }
+      // Applied first: its hand-over may refuse, and a new model waits for the robot at rest.
       const std::string outgoing = config_.localization.plugin;
       std::string refusal;
-      const LocalizationSwap::Result swapped =
-          localization_->swap(std::move(next), fresh.localization, 2.0, &refusal);
-      if (swapped == LocalizationSwap::Result::kRefused) {
+      const HotSwap::Result swapped = hot_swap_->swap(std::move(next), kSwapWaitS, &refusal);
+      if (swapped == HotSwap::Result::kNotAtRest) {
+        throw PluginError(fmt::format(
+            "robot_model: applies with the robot at rest; it did not come to rest within {:g} s "
+            "(stop it and reload again); still running on {}",
+            kSwapWaitS, config_.robot_model_path));
+      }
+      if (swapped == HotSwap::Result::kRefused) {
         throw PluginError(fresh.localization.where + " plugin '" + fresh.localization.plugin +
                           "' refused the hand-over: " + refusal + "; '" + outgoing +
-                          "' stays active");
+                          "' stays active" +
+                          (plan.swap_model ? " and robot_model stays " + config_.robot_model_path
+                                           : std::string()));
       }
-      applied.push_back(
-          "localization " + outgoing + " -> " + fresh.localization.plugin +
-          (outgoing == fresh.localization.plugin ? " (new parameters)" : "") +
-          (swapped == LocalizationSwap::Result::kPending ? " (not taken by the loop yet)" : ""));
+      if (plan.swap_model) {
+        apply_robot_model(fresh, std::move(fresh_model_text));
+        applied.push_back("robot_model " + config_.robot_model_path + " (drivetrain " +
+                          config_.drivetrain.plugin + " and localization " +
+                          fresh.localization.plugin + " rebuilt for it, taken at rest)");
+      }
+      if (plan.swap_localization) {
+        applied.push_back(
+            "localization " + outgoing + " -> " + fresh.localization.plugin +
+            (outgoing == fresh.localization.plugin ? " (new parameters)" : "") +
+            (swapped == HotSwap::Result::kPending ? " (not taken by the loop yet)" : ""));
+      }
     }
     if (plan.log_level) {
       spdlog::set_level(spdlog::level::from_str(*plan.log_level));
@@ -384,6 +422,22 @@ ReloadResult Daemon::reload(const std::string& trigger) {
   return result;
 }
 
+// The loop took the new model: what reads it from the configuration follows (the controlled
+// stop's limits at shutdown, the next calibration's nominal model and where it writes the
+// calibrated one, the diagnostics).
+void Daemon::apply_robot_model(const DaemonConfig& fresh, std::string text) {
+  config_.robot_model_path = fresh.robot_model_path;
+  config_.robot = fresh.robot;
+  robot_model_text_ = std::move(text);
+  reloads_->set_robot_model(config_.robot_model_path);
+  if (calibration_) {
+    calibration_ = std::make_unique<CalibrationService>(
+        config_, *loop_, loader_,
+        [this](const dds::CalibrationSample& sample) { publish_calibration(sample); });
+  }
+  spdlog::info("robot model {} ('{}') in effect", config_.robot_model_path, config_.robot.name);
+}
+
 int Daemon::run_until_signal(const sigset_t& signals) {
   constexpr double kTickS = 0.05;  // reload requests and retired instances are handled this often
   double next_status_s = monotonic_s() + status_period_s_;
@@ -393,7 +447,7 @@ int Daemon::run_until_signal(const sigset_t& signals) {
     if (reload_requested_.exchange(false, std::memory_order_acq_rel)) {
       reload("configuration file changed or reload requested");
     }
-    (void)localization_->collect();
+    (void)hot_swap_->collect();
     answer_requests(*requests_, stopping_, *handlers_, publish);
     if (calibration_) calibration_->poll();
     double wait_s = std::min(kTickS, next_status_s - monotonic_s());

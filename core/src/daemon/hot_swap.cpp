@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "localization_swap.hpp"
+#include "hot_swap.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -8,58 +8,74 @@
 #include <utility>
 
 #include "swivel/clock.hpp"
-#include "swivel/rt/control_loop.hpp"
 
 namespace swivel::daemon {
 
-LocalizationSwap::LocalizationSwap(PluginInstance<Localization> active, PluginConfig& active_slot)
-    : active_(std::move(active)), active_slot_(active_slot) {}
+HotSwap::HotSwap(PluginInstance<Localization> localization, PluginConfig& localization_slot,
+                 PluginInstance<Drivetrain> drivetrain)
+    : localization_(std::move(localization)),
+      localization_slot_(localization_slot),
+      drivetrain_(std::move(drivetrain)) {}
 
-LocalizationSwap::~LocalizationSwap() = default;
+HotSwap::~HotSwap() = default;
 
-bool LocalizationSwap::busy() const noexcept {
-  return incoming_ || (loop_ != nullptr && loop_->swap_pending());
+bool HotSwap::busy() const noexcept {
+  return incoming_.localization || (loop_ != nullptr && loop_->swap_pending());
 }
 
-LocalizationSwap::Result LocalizationSwap::collect(std::string* refusal) noexcept {
-  if (loop_ == nullptr || !incoming_) return Result::kPending;
-  rt::SwapOutcome outcome;
-  Localization* retired = loop_->take_retired_localization(&outcome);
+HotSwap::Result HotSwap::collect(std::string* refusal) noexcept {
+  if (loop_ == nullptr || !incoming_.localization) return Result::kPending;
+  const rt::LoopSwap* retired = loop_->take_retired_swap();
   if (retired == nullptr) return Result::kPending;
-  if (!outcome.taken && retired == incoming_.get()) {
-    // Rolled back: the loop kept the active instance and never used this one.
-    if (refusal != nullptr) *refusal = outcome.refusal.data();
-    incoming_.reset();
+  if (retired == &request_ && !request_.outcome.taken &&
+      request_.localization == incoming_.localization.get()) {
+    // Rolled back: the loop kept the active instances and never used these.
+    if (refusal != nullptr) *refusal = request_.outcome.refusal.data();
+    incoming_ = Incoming{};
     return Result::kRefused;
   }
-  if (outcome.taken && retired == active_.get()) {
-    // The loop let go of the outgoing instance: destroy it, then its library may unload.
-    active_ = std::move(incoming_);
-    active_slot_ = incoming_slot_;
+  if (retired == &request_ && request_.outcome.taken &&
+      request_.localization == localization_.get() &&
+      (!incoming_.drivetrain || request_.drivetrain == drivetrain_.get())) {
+    // The loop let go of the outgoing instances: destroy them, then their libraries may
+    // unload.
+    localization_ = std::move(incoming_.localization);
+    localization_slot_ = incoming_.localization_slot;
+    if (incoming_.drivetrain) drivetrain_ = std::move(incoming_.drivetrain);
+    incoming_ = Incoming{};
     return Result::kTaken;
   }
   try {
-    spdlog::error("hot swap: the loop retired an unexpected localization instance");
+    spdlog::error("hot swap: the loop retired unexpected instances");
   } catch (...) {
   }
   return Result::kPending;
 }
 
-LocalizationSwap::Result LocalizationSwap::swap(PluginInstance<Localization> next,
-                                                const PluginConfig& slot, double timeout_s,
-                                                std::string* refusal) {
+HotSwap::Result HotSwap::swap(Incoming next, double timeout_s, std::string* refusal) {
   incoming_ = std::move(next);
-  incoming_slot_ = slot;
-  if (!loop_->request_localization_swap(incoming_.get(), slot.plugin.c_str())) {
-    incoming_.reset();
-    throw PluginError("the loop refused the localization swap (one is still pending)");
+  request_ = rt::LoopSwap{};
+  request_.localization = incoming_.localization.get();
+  rt::copy_text(incoming_.localization_slot.plugin.c_str(), request_.localization_name);
+  request_.drivetrain = incoming_.drivetrain ? incoming_.drivetrain.get() : nullptr;
+  request_.model = incoming_.model;
+  if (!loop_->request_swap(&request_)) {
+    incoming_ = Incoming{};
+    throw PluginError("the loop refused the swap (one is still in flight)");
   }
-  // The loop takes it, or rolls it back, at its next cycle boundary.
+  // The loop takes it, or rolls it back, at a cycle boundary (a model swap: one at rest).
   const double deadline_s = monotonic_s() + timeout_s;
   Result result = Result::kPending;
   while (result == Result::kPending && monotonic_s() < deadline_s) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     result = collect(refusal);
+  }
+  if (result == Result::kPending && request_.drivetrain != nullptr) {
+    if (loop_->withdraw_swap(&request_)) {
+      incoming_ = Incoming{};  // never called by the loop
+      return Result::kNotAtRest;
+    }
+    result = collect(refusal);  // the loop decided just now
   }
   return result;
 }

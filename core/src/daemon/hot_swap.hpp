@@ -1,65 +1,81 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The localization instance the real-time loop uses and a hot swap in flight: hands a new
-// instance to the loop, learns whether the loop took it or rolled it back, and destroys
-// whichever instance the loop let go of, off the loop (docs/architecture.md "Reload and hot swap").
+// The drivetrain and localization instances the real-time loop uses and a hot swap in flight:
+// hands new instances to the loop (a localization, or for a new robot model a drivetrain
+// and a localization built for it), learns whether the loop took them or rolled them back,
+// and destroys whichever instances the loop let go of, off the loop (docs/architecture.md
+// "Reload and hot swap").
 //
 // Main thread only (reloads and the main loop's periodic collection). Not real-time safe.
 
 #include <string>
 
 #include "swivel/daemon/daemon_config.hpp"
+#include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/plugin_loader.hpp"
-
-namespace swivel::rt {
-class ControlLoop;
-}
+#include "swivel/rt/control_loop.hpp"
 
 namespace swivel::daemon {
 
-class LocalizationSwap {
+class HotSwap {
  public:
-  /// What the loop did with the instance handed over, once it let go of one.
-  enum class Result { kPending, kTaken, kRefused };
+  /// What the loop did with the instances handed over. kNotAtRest: a new robot model that
+  /// the loop did not take because the robot did not come to rest in time; it was withdrawn.
+  enum class Result { kPending, kTaken, kRefused, kNotAtRest };
 
-  /// `active` is the instance the loop starts with; `active_slot` its configuration, which
-  /// is overwritten with the incoming one's when the loop takes a swap.
-  LocalizationSwap(PluginInstance<Localization> active, PluginConfig& active_slot);
-  ~LocalizationSwap();
-  LocalizationSwap(const LocalizationSwap&) = delete;
-  LocalizationSwap& operator=(const LocalizationSwap&) = delete;
+  /// What a swap brings: a localization with its configuration and, for a new robot model,
+  /// a drivetrain configured for it with the model's loop settings.
+  struct Incoming {
+    PluginInstance<Localization> localization;  ///< configured and reset
+    PluginConfig localization_slot;
+    PluginInstance<Drivetrain> drivetrain;  ///< empty: the running drivetrain stays
+    rt::ModelSettings model;                ///< with a drivetrain only
+  };
 
-  /// The instance the loop uses (or, during a swap, used before it).
-  [[nodiscard]] Localization& active() { return *active_; }
+  /// `localization` and `drivetrain` are the instances the loop starts with;
+  /// `localization_slot` the localization's configuration, which is overwritten with the
+  /// incoming one's when the loop takes a swap.
+  HotSwap(PluginInstance<Localization> localization, PluginConfig& localization_slot,
+          PluginInstance<Drivetrain> drivetrain);
+  ~HotSwap();
+  HotSwap(const HotSwap&) = delete;
+  HotSwap& operator=(const HotSwap&) = delete;
+
+  /// The instances the loop uses (or, during a swap, used before it).
+  [[nodiscard]] Localization& localization() { return *localization_; }
+  [[nodiscard]] Drivetrain& drivetrain() { return *drivetrain_; }
 
   /// Once the loop runs: attach it (before any other call). Null detaches (after it stopped).
   void attach(rt::ControlLoop* loop) noexcept { loop_ = loop; }
 
-  /// Takes back the instance the loop let go of, if it did: the outgoing one after a taken
-  /// swap (destroyed; the incoming one becomes active), or the incoming one after a refused
-  /// hand-over (destroyed; `refusal`, when given, receives the plugin's reason).
+  /// Takes back the instances the loop let go of, if it did: the outgoing ones after a taken
+  /// swap (destroyed; the incoming ones become active), or the incoming ones after a refused
+  /// hand-over (destroyed; `refusal`, when given, receives the reason).
   Result collect(std::string* refusal = nullptr) noexcept;
 
   /// True while an earlier swap has not been taken or rolled back.
   [[nodiscard]] bool busy() const noexcept;
 
-  /// Hands `next` (configured and reset) with its configuration `slot` to the loop and
-  /// waits up to `timeout_s` for the loop to take it or roll it back at a cycle boundary.
-  /// kPending when the loop has not decided yet (collect() later finishes the swap).
-  /// @throws PluginError when the loop refuses the request (a swap is still pending).
-  Result swap(PluginInstance<Localization> next, const PluginConfig& slot, double timeout_s,
-              std::string* refusal);
+  /// Hands `next` to the loop and waits up to `timeout_s` for the loop to take it or roll it
+  /// back at a cycle boundary. A localization alone: kPending when the loop has not decided
+  /// yet (collect() later finishes the swap). With a drivetrain the loop waits for a cycle
+  /// at rest; when none came within `timeout_s` the swap is withdrawn and destroyed
+  /// (kNotAtRest), so that a model swap has always ended when this returns.
+  /// @throws PluginError when the loop refuses the request (a swap is still in flight).
+  Result swap(Incoming next, double timeout_s, std::string* refusal);
 
-  /// Destroys an instance handed over that the loop never took (after the loop stopped).
-  void drop_incoming() noexcept { incoming_.reset(); }
+  /// Destroys instances handed over that the loop never took (after the loop stopped).
+  void drop_incoming() noexcept { incoming_ = Incoming{}; }
 
  private:
-  PluginInstance<Localization> active_;
-  PluginConfig& active_slot_;
-  // Handed to the loop and not retired or taken yet; `incoming_slot_` is its configuration.
-  PluginInstance<Localization> incoming_;
-  PluginConfig incoming_slot_;
+  PluginInstance<Localization> localization_;
+  PluginConfig& localization_slot_;
+  PluginInstance<Drivetrain> drivetrain_;
+  // Handed to the loop and not retired or taken yet (no localization: none in flight), and
+  // the request the loop reads and writes back into meanwhile.
+  Incoming incoming_;
+  rt::LoopSwap request_;
   rt::ControlLoop* loop_ = nullptr;
 };
 

@@ -6,6 +6,19 @@
 #include "swivel/plugin/calibration.hpp"
 
 namespace swivel::daemon {
+namespace {
+
+void check_module_count(const Drivetrain& drivetrain, const DaemonConfig& config,
+                        const RobotModel& robot) {
+  if (drivetrain.module_count() != robot.module_count()) {
+    throw PluginError(config.drivetrain.where + " plugin '" + config.drivetrain.plugin +
+                      "' drives " + std::to_string(drivetrain.module_count()) +
+                      " modules, but robot model " + robot.source_file + " has " +
+                      std::to_string(robot.module_count()));
+  }
+}
+
+}  // namespace
 
 std::vector<std::string> plugin_search_path(const DaemonConfig& config) {
   std::vector<std::string> path = config.plugin_path;
@@ -38,12 +51,7 @@ PluginSet assemble_plugins(PluginLoader& loader, const DaemonConfig& config) {
   configure_plugin(*set.hardware, config.hardware, context(config.hardware));
   configure_plugin(*set.drivetrain, config.drivetrain, context(config.drivetrain));
   configure_plugin(*set.localization, config.localization, context(config.localization));
-  if (set.drivetrain->module_count() != config.robot.module_count()) {
-    throw PluginError(config.drivetrain.where + " plugin '" + config.drivetrain.plugin +
-                      "' drives " + std::to_string(set.drivetrain->module_count()) +
-                      " modules, but robot model " + config.robot_model_path + " has " +
-                      std::to_string(config.robot.module_count()));
-  }
+  check_module_count(*set.drivetrain, config, config.robot);
   set.localization->reset(PoseEstimate{});
   if (config.has_calibration()) {
     // Configured once here so that a mistake in its params (or a robot it cannot calibrate)
@@ -61,6 +69,15 @@ PluginInstance<Localization> make_localization(PluginLoader& loader, const Daemo
   configure_plugin(*next, fresh.localization,
                    plugin_context(fresh.localization, fresh, robot, period_s));
   next->reset(estimate);
+  return next;
+}
+
+PluginInstance<Drivetrain> make_drivetrain(PluginLoader& loader, const DaemonConfig& running,
+                                           const RobotModel& robot) {
+  PluginInstance<Drivetrain> next = create_plugin<Drivetrain>(loader, running.drivetrain);
+  configure_plugin(*next, running.drivetrain,
+                   plugin_context(running.drivetrain, running, robot, running.period_s()));
+  check_module_count(*next, running, robot);
   return next;
 }
 

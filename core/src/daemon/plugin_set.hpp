@@ -72,11 +72,20 @@ struct PluginSet {
 PluginSet assemble_plugins(PluginLoader& loader, const DaemonConfig& config);
 
 /// A reload's localization: `fresh.localization` created and configured with the new
-/// configuration's params and file, for the running robot model `robot` and loop period
-/// `period_s` (neither changes without a restart), then reset to `estimate`.
+/// configuration's params and file, for the robot model `robot` (the running one, or the
+/// new one of a model swap) and the loop period `period_s` (unchanged without a restart),
+/// then reset to `estimate`.
 /// @throws ConfigError or PluginError as above.
 PluginInstance<Localization> make_localization(PluginLoader& loader, const DaemonConfig& fresh,
                                                const RobotModel& robot, double period_s,
                                                const PoseEstimate& estimate);
+
+/// A reload's drivetrain for a new robot model: the running configuration's `drivetrain:`
+/// slot (its plugin and params change only with a restart) configured for `robot`, with as
+/// many modules as the model says.
+/// @throws ConfigError (the model's values the plugin refuses, naming the model file) or
+///         PluginError as above.
+PluginInstance<Drivetrain> make_drivetrain(PluginLoader& loader, const DaemonConfig& running,
+                                           const RobotModel& robot);
 
 }  // namespace swivel::daemon

@@ -43,10 +43,6 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
   if (fresh.rate_hz != running.rate_hz) restart.emplace_back("loop.rate_hz");
   if (fresh.fifo_priority != running.fifo_priority) restart.emplace_back("loop.fifo_priority");
   if (fresh.realtime != running.realtime) restart.emplace_back("loop.realtime");
-  if (fresh.robot_model_path != running.robot_model_path ||
-      fresh_model_text != running_model_text) {
-    restart.emplace_back("robot_model");
-  }
   if (!same_slot(fresh.hardware, running.hardware)) restart.emplace_back("hardware");
   if (!same_slot(fresh.drivetrain, running.drivetrain)) restart.emplace_back("drivetrain");
   if (fresh.command.timeout_s != running.command.timeout_s ||
@@ -65,11 +61,30 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
   }
   if (fresh.twist_window_s != running.twist_window_s) restart.emplace_back("odometry");
   plan.swap_localization = !same_slot(fresh.localization, running.localization);
+  plan.swap_model = fresh.robot_model_path != running.robot_model_path ||
+                    fresh_model_text != running_model_text;
   if (fresh.log_level != running.log_level) plan.log_level = fresh.log_level;
   if (fresh.status_period_s != running.status_period_s) {
     plan.status_period_s = fresh.status_period_s;
   }
   return plan;
+}
+
+std::string model_swap_problem(const RobotModel& running, const RobotModel& fresh) {
+  const auto kind = [](DrivetrainKind k) { return k == DrivetrainKind::kSwpc ? "swpc" : "differential"; };
+  if (fresh.drivetrain != running.drivetrain) {
+    return std::string("drivetrain: ") + kind(fresh.drivetrain) + ", but the running robot is " +
+           kind(running.drivetrain) + " (a new drivetrain kind needs a restart)";
+  }
+  if (fresh.module_count() != running.module_count()) {
+    return std::to_string(fresh.module_count()) + " modules, but the running robot has " +
+           std::to_string(running.module_count()) + " (a new module count needs a restart)";
+  }
+  if (fresh.name != running.name) {
+    return "name: '" + fresh.name + "', but the running robot is '" + running.name +
+           "' (its DDS topics are keyed by the name: a new name needs a restart)";
+  }
+  return "";
 }
 
 std::string describe_reload(const std::vector<std::string>& applied,

@@ -15,11 +15,15 @@ namespace swivel::daemon {
 
 struct ReloadPlan {
   /// Changed settings that only a restart applies, in the order of the configuration
-  /// reference: loop.rate_hz, loop.fifo_priority, loop.realtime, robot_model, hardware,
-  /// drivetrain, command, plugin_path, dds, calibration, controlled_stop.
+  /// reference: loop.rate_hz, loop.fifo_priority, loop.realtime, hardware, drivetrain,
+  /// command, plugin_path, dds, calibration, controlled_stop, odometry.
   std::vector<std::string> restart;
   /// The localization's plugin or params changed: build the new one and hot-swap it.
   bool swap_localization = false;
+  /// robot_model changed (its path or its file's contents): build the drivetrain and the
+  /// localization for the new model and swap them in together, with the robot at rest.
+  /// model_swap_problem() says whether the running robot can take it at all.
+  bool swap_model = false;
   /// A new logging.level, when it changed.
   std::optional<std::string> log_level;
   /// A new status.period_s, when it changed.
@@ -27,7 +31,7 @@ struct ReloadPlan {
 
   /// Nothing to apply live (a restart may still be needed).
   [[nodiscard]] bool no_live_change() const {
-    return !swap_localization && !log_level && !status_period_s;
+    return !swap_localization && !swap_model && !log_level && !status_period_s;
   }
 };
 
@@ -36,6 +40,11 @@ struct ReloadPlan {
 /// edited model file counts as a change even under the same path.
 ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_model_text,
                        const DaemonConfig& fresh, std::string_view fresh_model_text);
+
+/// Why the running robot cannot take `fresh` as its new model, or "" when it can: the
+/// hardware keeps what it was built with, so the drivetrain kind and the module count must
+/// stay, and the robot's name (the DDS key of its topics) as well.
+std::string model_swap_problem(const RobotModel& running, const RobotModel& fresh);
 
 /// `items` joined by ", ".
 std::string comma_list(const std::vector<std::string>& items);

@@ -27,8 +27,8 @@
 //
 // Each of these jobs is a type of its own in core/src/daemon/, which this class wires
 // together: plugin_set (creating and configuring plugins, at start-up and on reload),
-// reload_plan (what a new configuration changes: a pure function), localization_swap (the
-// hot swap), request_router (the DDS request queue and its verbs), loop_requests (clear and
+// reload_plan (what a new configuration changes: a pure function), hot_swap (a new
+// localization or robot model under the running loop), request_router (the DDS request queue and its verbs), loop_requests (clear and
 // set-pose through the loop), calibration_service (calibrate and the runner's polling),
 // script_source (the built-in command source), run_recorder (--record), diagnostics (the
 // Diagnostics sample), service_integration (sd_notify, watchdog, status line),
@@ -66,7 +66,7 @@ namespace swivel::daemon {
 class CalibrationService;
 class ConfigWatcher;
 class DiagnosticsSource;
-class LocalizationSwap;
+class HotSwap;
 class LoopRequests;
 class ReloadRecord;
 class RequestQueue;
@@ -124,8 +124,10 @@ class Daemon {
   int run_until_signal(const sigset_t& signals);
 
   /// Re-reads and validates the configuration file and applies what can change live (the
-  /// localization by hot swap, logging level, status period; a changed `calibration:` needs
-  /// a restart). Main thread only, while the loop runs. `trigger` names the cause in the log.
+  /// localization by hot swap; a new robot model by swapping in a drivetrain and a
+  /// localization built for it, with the robot at rest; logging level, status period; a
+  /// changed `calibration:` needs a restart). Main thread only, while the loop runs.
+  /// `trigger` names the cause in the log.
   ReloadResult reload(const std::string& trigger);
 
   /// Asks the main thread to reload soon (any thread).
@@ -153,6 +155,7 @@ class Daemon {
   void start_bridge();
   void publish_calibration(const dds::CalibrationSample& sample) noexcept;
   void publish_reply(const dds::ReplySample& reply);
+  void apply_robot_model(const DaemonConfig& fresh, std::string text);
 
   // Declared in the order they must outlive one another (stop() tears down explicitly, in
   // the order it documents): the loop uses the plugins, the threads around it use the loop,
@@ -160,15 +163,14 @@ class Daemon {
   DaemonConfig config_;  // the configuration in effect (main thread writes, on reload)
   DaemonOptions options_;
   dds::DdsOptions dds_options_;
-  std::string robot_model_text_;  // to tell a changed model apart on reload
+  std::string robot_model_text_;  // the model in effect, to tell a changed one apart on reload
   std::unique_ptr<ServiceIntegration> service_;
   std::unique_ptr<ReloadRecord> reloads_;
   std::unique_ptr<RequestQueue> requests_;     // subscriber thread -> main thread
   std::unique_ptr<RequestHandlers> handlers_;  // who answers each verb (main thread)
   PluginLoader loader_;
   PluginInstance<Hardware> hardware_;
-  PluginInstance<Drivetrain> drivetrain_;
-  std::unique_ptr<LocalizationSwap> localization_;  // the loop's instance and a swap in flight
+  std::unique_ptr<HotSwap> hot_swap_;  // the loop's drivetrain and localization, a swap in flight
   std::unique_ptr<RunRecorder> recorder_;
   std::unique_ptr<rt::ControlLoop> loop_;
   std::unique_ptr<LoopRequests> loop_requests_;
