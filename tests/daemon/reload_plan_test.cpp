@@ -133,14 +133,15 @@ TEST(ReloadPlan, AModelTheRunningRobotCannotTakeIsNamed) {
   EXPECT_EQ(model_swap_problem(docent, docent), "");
 
   const std::string kind = model_swap_problem(docent, swpc4);
-  EXPECT_NE(kind.find("drivetrain: swpc, but the running robot is differential"),
-            std::string::npos)
+  EXPECT_NE(kind.find("drivetrain: swpc, but the running robot is differential"), std::string::npos)
       << kind;
   RobotModel three = swpc4;
   three.modules.pop_back();
   const std::string count = model_swap_problem(swpc4, three);
-  EXPECT_NE(count.find(std::to_string(swpc4.module_count() - 1) + " modules, but the running "
-                       "robot has " + std::to_string(swpc4.module_count())),
+  EXPECT_NE(count.find(std::to_string(swpc4.module_count() - 1) +
+                       " modules, but the running "
+                       "robot has " +
+                       std::to_string(swpc4.module_count())),
             std::string::npos)
       << count;
   RobotModel renamed = docent;

@@ -224,10 +224,9 @@ void CalibrationRunner::finish_analysis_locked() {
     return;
   }
   calibrated_file_ = saved.path;
-  set_status_locked("done",
-                    "calibrated model written to " + calibrated_file_ +
-                        "; to apply it, set robot_model: " + calibrated_file_ +
-                        " and reload with the robot at rest");
+  set_status_locked("done", "calibrated model written to " + calibrated_file_ +
+                                "; to apply it, set robot_model: " + calibrated_file_ +
+                                " and reload with the robot at rest");
   status_.progress = 1.0;
   publish_locked();
 }

@@ -170,8 +170,8 @@ void Daemon::start() {
 }
 
 void Daemon::start_bridge() {
-  diagnostics_ = std::make_unique<DiagnosticsSource>(*loop_, hardware_.name(),
-                                                     config_.drivetrain.plugin, start_s_, *reloads_);
+  diagnostics_ = std::make_unique<DiagnosticsSource>(
+      *loop_, hardware_.name(), config_.drivetrain.plugin, start_s_, *reloads_);
   dds::DdsCallbacks callbacks;
   callbacks.read_state = [this](StateSnapshot& out) {
     out = loop_->latest();
@@ -320,7 +320,7 @@ void Daemon::stop() noexcept {
     loop_.reset();
   }
   hot_swap_->drop_incoming();  // a swap the loop never took: the instances were never used
-  recorder_.reset();               // flushes the run log
+  recorder_.reset();           // flushes the run log
 }
 
 ReloadResult Daemon::reload(const std::string& trigger) {
@@ -356,8 +356,8 @@ ReloadResult Daemon::reload(const std::string& trigger) {
       // for the model in effect.
       const RobotModel& robot = plan.swap_model ? fresh.robot : config_.robot;
       HotSwap::Incoming next;
-      next.localization = make_localization(loader_, fresh, robot, config_.period_s(),
-                                            loop_->latest().estimate);
+      next.localization =
+          make_localization(loader_, fresh, robot, config_.period_s(), loop_->latest().estimate);
       next.localization_slot = fresh.localization;
       if (plan.swap_model) {
         next.drivetrain = make_drivetrain(loader_, config_, fresh.robot);
@@ -379,6 +379,10 @@ ReloadResult Daemon::reload(const std::string& trigger) {
                           "' stays active" +
                           (plan.swap_model ? " and robot_model stays " + config_.robot_model_path
                                            : std::string()));
+      }
+      if (plan.swap_model && swapped != HotSwap::Result::kTaken) {
+        throw PluginError("robot_model: the loop did not take the new model; still running on " +
+                          config_.robot_model_path);
       }
       if (plan.swap_model) {
         apply_robot_model(fresh, std::move(fresh_model_text));

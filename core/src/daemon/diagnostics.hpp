@@ -43,7 +43,8 @@ class DiagnosticsSource {
  public:
   /// `hardware_plugin` and `drivetrain_plugin` never change while running (a new robot
   /// model brings a new instance of the same drivetrain plugin); the localization's name is
-  /// the loop's, the robot model the reload record's. `start_s` is when the loop started (monotonic).
+  /// the loop's, the robot model the reload record's. `start_s` is when the loop started
+  /// (monotonic).
   DiagnosticsSource(const rt::ControlLoop& loop, std::string hardware_plugin,
                     std::string drivetrain_plugin, double start_s, const ReloadRecord& reloads);
 

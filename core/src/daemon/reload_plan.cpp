@@ -61,8 +61,8 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
   }
   if (fresh.twist_window_s != running.twist_window_s) restart.emplace_back("odometry");
   plan.swap_localization = !same_slot(fresh.localization, running.localization);
-  plan.swap_model = fresh.robot_model_path != running.robot_model_path ||
-                    fresh_model_text != running_model_text;
+  plan.swap_model =
+      fresh.robot_model_path != running.robot_model_path || fresh_model_text != running_model_text;
   if (fresh.log_level != running.log_level) plan.log_level = fresh.log_level;
   if (fresh.status_period_s != running.status_period_s) {
     plan.status_period_s = fresh.status_period_s;
@@ -71,7 +71,9 @@ ReloadPlan plan_reload(const DaemonConfig& running, std::string_view running_mod
 }
 
 std::string model_swap_problem(const RobotModel& running, const RobotModel& fresh) {
-  const auto kind = [](DrivetrainKind k) { return k == DrivetrainKind::kSwpc ? "swpc" : "differential"; };
+  const auto kind = [](DrivetrainKind k) {
+    return k == DrivetrainKind::kSwpc ? "swpc" : "differential";
+  };
   if (fresh.drivetrain != running.drivetrain) {
     return std::string("drivetrain: ") + kind(fresh.drivetrain) + ", but the running robot is " +
            kind(running.drivetrain) + " (a new drivetrain kind needs a restart)";

@@ -28,10 +28,10 @@
 // Each of these jobs is a type of its own in core/src/daemon/, which this class wires
 // together: plugin_set (creating and configuring plugins, at start-up and on reload),
 // reload_plan (what a new configuration changes: a pure function), hot_swap (a new
-// localization or robot model under the running loop), request_router (the DDS request queue and its verbs), loop_requests (clear and
-// set-pose through the loop), calibration_service (calibrate and the runner's polling),
-// script_source (the built-in command source), run_recorder (--record), diagnostics (the
-// Diagnostics sample), service_integration (sd_notify, watchdog, status line),
+// localization or robot model under the running loop), request_router (the DDS request queue and
+// its verbs), loop_requests (clear and set-pose through the loop), calibration_service (calibrate
+// and the runner's polling), script_source (the built-in command source), run_recorder (--record),
+// diagnostics (the Diagnostics sample), service_integration (sd_notify, watchdog, status line),
 // controlled_stop and hardware_lifecycle (shutdown).
 //
 // Hardware lifecycle (swivel/plugin/hardware.hpp): configure() in the constructor,
