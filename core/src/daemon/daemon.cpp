@@ -366,7 +366,7 @@ ReloadResult Daemon::reload(const std::string& trigger) {
       // Applied first: its hand-over may refuse, and a new model waits for the robot at rest.
       const std::string outgoing = config_.localization.plugin;
       std::string refusal;
-      const HotSwap::Result swapped = hot_swap_->swap(std::move(next), kSwapWaitS, &refusal);
+      const HotSwap::Result swapped = hot_swap_->exchange(std::move(next), kSwapWaitS, &refusal);
       if (swapped == HotSwap::Result::kNotAtRest) {
         throw PluginError(fmt::format(
             "robot_model: applies with the robot at rest; it did not come to rest within {:g} s "

@@ -19,6 +19,12 @@ HotSwap::HotSwap(PluginInstance<Localization> localization, PluginConfig& locali
 
 HotSwap::~HotSwap() = default;
 
+// Destroys the incoming instances; no localization marks that none is in flight.
+void HotSwap::release_incoming() noexcept {
+  incoming_.localization.reset();
+  incoming_.drivetrain.reset();
+}
+
 bool HotSwap::busy() const noexcept {
   return incoming_.localization || (loop_ != nullptr && loop_->swap_pending());
 }
@@ -31,7 +37,7 @@ HotSwap::Result HotSwap::collect(std::string* refusal) noexcept {
       request_.localization == incoming_.localization.get()) {
     // Rolled back: the loop kept the active instances and never used these.
     if (refusal != nullptr) *refusal = request_.outcome.refusal.data();
-    incoming_ = Incoming{};
+    release_incoming();
     return Result::kRefused;
   }
   if (retired == &request_ && request_.outcome.taken &&
@@ -42,7 +48,7 @@ HotSwap::Result HotSwap::collect(std::string* refusal) noexcept {
     localization_ = std::move(incoming_.localization);
     localization_slot_ = incoming_.localization_slot;
     if (incoming_.drivetrain) drivetrain_ = std::move(incoming_.drivetrain);
-    incoming_ = Incoming{};
+    release_incoming();
     return Result::kTaken;
   }
   try {
@@ -52,7 +58,7 @@ HotSwap::Result HotSwap::collect(std::string* refusal) noexcept {
   return Result::kPending;
 }
 
-HotSwap::Result HotSwap::swap(Incoming next, double timeout_s, std::string* refusal) {
+HotSwap::Result HotSwap::exchange(Incoming next, double timeout_s, std::string* refusal) {
   incoming_ = std::move(next);
   request_ = rt::LoopSwap{};
   request_.localization = incoming_.localization.get();
@@ -60,7 +66,7 @@ HotSwap::Result HotSwap::swap(Incoming next, double timeout_s, std::string* refu
   request_.drivetrain = incoming_.drivetrain ? incoming_.drivetrain.get() : nullptr;
   request_.model = incoming_.model;
   if (!loop_->request_swap(&request_)) {
-    incoming_ = Incoming{};
+    release_incoming();
     throw PluginError("the loop refused the swap (one is still in flight)");
   }
   // The loop takes it, or rolls it back, at a cycle boundary (a model swap: one at rest).
@@ -72,7 +78,7 @@ HotSwap::Result HotSwap::swap(Incoming next, double timeout_s, std::string* refu
   }
   if (result == Result::kPending && request_.drivetrain != nullptr) {
     if (loop_->withdraw_swap(&request_)) {
-      incoming_ = Incoming{};  // never called by the loop
+      release_incoming();  // never called by the loop
       return Result::kNotAtRest;
     }
     result = collect(refusal);  // the loop decided just now

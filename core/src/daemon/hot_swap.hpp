@@ -63,12 +63,14 @@ class HotSwap {
   /// at rest; when none came within `timeout_s` the swap is withdrawn and destroyed
   /// (kNotAtRest), so that a model swap has always ended when this returns.
   /// @throws PluginError when the loop refuses the request (a swap is still in flight).
-  Result swap(Incoming next, double timeout_s, std::string* refusal);
+  Result exchange(Incoming next, double timeout_s, std::string* refusal);
 
   /// Destroys instances handed over that the loop never took (after the loop stopped).
-  void drop_incoming() noexcept { incoming_ = Incoming{}; }
+  void drop_incoming() noexcept { release_incoming(); }
 
  private:
+  void release_incoming() noexcept;
+
   PluginInstance<Localization> localization_;
   PluginConfig& localization_slot_;
   PluginInstance<Drivetrain> drivetrain_;
