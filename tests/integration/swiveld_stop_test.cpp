@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
-// How far the simulated robot travels after SIGTERM. swiveld runs the docent robot at 1 kHz
-// and is driven at 0.5 m/s over DDS; a swivelctl stream records the state (cycle stamps and
-// the simulator's true pose). The test sends SIGTERM at a CLOCK_MONOTONIC instant, takes the
-// true position at that instant from the last state before it (the robot moves at a steady
-// speed there), and compares it with where the robot came to rest: at most v^2 / (2 a_max)
-// plus one cycle's travel. The state keeps coming until the robot is at rest (DDS goes
-// last), and the daemon logs that it deactivated the hardware after the robot stopped.
+// How far the simulated robot travels once swiveld starts stopping it. swiveld runs the
+// docent robot at 1 kHz and is driven at 0.5 m/s over DDS; a swivelctl stream records the
+// state (cycle stamps and the simulator's true pose). After SIGTERM the loop logs the cycle
+// time at which its controlled stop began; the test takes the true position at that instant
+// from the last state before it (the robot moves at a steady speed there) and compares it
+// with where the robot came to rest: at most v^2 / (2 a_max), plus one cycle's travel and
+// one for the log's millisecond stamp. How long the daemon took to start stopping is a
+// separate, generous bound: it depends on how loaded the machine is. The state keeps coming
+// until the robot is at rest (DDS goes last), and the daemon logs that it deactivated the
+// hardware after the robot stopped.
 
 #include <gtest/gtest.h>
 
@@ -24,8 +27,9 @@ constexpr double kSpeedMps = 0.5;
 constexpr double kRateHz = 1000.0;
 
 struct StopRun {
-  double distance_m = 0.0;  ///< travelled after SIGTERM
+  double distance_m = 0.0;  ///< travelled from the start of the controlled stop
   double speed_mps = 0.0;   ///< measured just before it
+  double reaction_s = 0.0;  ///< from SIGTERM to the start of the controlled stop
   int exit_code = -1;
   std::string log;
 };
@@ -94,8 +98,18 @@ StopRun stop_after_sigterm(const std::string& robot, int domain, const std::stri
     json s = json::parse(line, nullptr, false);
     if (!s.is_discarded() && s.contains("truth")) states.push_back(std::move(s));
   }
+  // "loop cycle N t=12.345s: message: controlled stop: commands ignored, ...": the loop's
+  // clock, the clock of the states' stamps.
+  const std::size_t stop_line = run.log.find("controlled stop: commands ignored");
+  const std::size_t stamp = run.log.rfind(" t=", stop_line);
+  if (stop_line == std::string::npos || stamp == std::string::npos) {
+    ADD_FAILURE() << "the loop never logged the start of its controlled stop\n" << run.log;
+    return run;
+  }
+  const double stop_s = std::stod(run.log.substr(stamp + 3));
+  run.reaction_s = stop_s - sigterm_s;
   std::size_t last_before = 0;
-  while (last_before + 1 < states.size() && states[last_before + 1]["stamp_s"] <= sigterm_s) {
+  while (last_before + 1 < states.size() && states[last_before + 1]["stamp_s"] <= stop_s) {
     ++last_before;
   }
   if (states.size() < 50 || last_before < 20 || last_before + 1 >= states.size()) {
@@ -107,8 +121,8 @@ StopRun stop_after_sigterm(const std::string& robot, int domain, const std::stri
   const json& before = states[last_before];
   const json& earlier = states[last_before - 20];
   run.speed_mps = (x(before) - x(earlier)) / (t(before) - t(earlier));
-  const double at_sigterm_m = x(before) + run.speed_mps * (sigterm_s - t(before));
-  run.distance_m = x(states.back()) - at_sigterm_m;
+  const double at_stop_m = x(before) + run.speed_mps * (stop_s - t(before));
+  run.distance_m = x(states.back()) - at_stop_m;
   // The stream went on until the robot was at rest.
   EXPECT_EQ(states.back()["command"]["vx_mps"].get<double>(), 0.0);
   EXPECT_LT(std::abs(states.back()["twist"]["vx_mps"].get<double>()), 0.005);
@@ -119,12 +133,16 @@ StopRun stop_after_sigterm(const std::string& robot, int domain, const std::stri
 void expect_stop_within(const StopRun& run, double a_max_mps2) {
   EXPECT_EQ(run.exit_code, 0) << run.log;
   EXPECT_NEAR(run.speed_mps, kSpeedMps, 0.005);
-  const double bound_m = kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) + kSpeedMps / kRateHz;
+  EXPECT_GE(run.reaction_s, 0.0) << run.log;
+  EXPECT_LT(run.reaction_s, 0.1) << "SIGTERM took long to start the stop\n" << run.log;
+  const double bound_m = kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) + 2.0 * kSpeedMps / kRateHz;
   EXPECT_LE(run.distance_m, bound_m) << run.log;
   // And not a stop harder than the limit allows (a margin for the sampling).
   EXPECT_GE(run.distance_m, kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) - 0.002);
-  std::printf("travelled %.5f m after SIGTERM from %.4f m/s at %.1f m/s^2 (bound %.5f m)\n",
-              run.distance_m, run.speed_mps, a_max_mps2, bound_m);
+  std::printf(
+      "stop began %.1f ms after SIGTERM; travelled %.5f m from %.4f m/s at %.1f m/s^2 (bound "
+      "%.5f m)\n",
+      run.reaction_s * 1e3, run.distance_m, run.speed_mps, a_max_mps2, bound_m);
   // Stop first: the robot at rest, then the drives off, then everything else.
   const auto rest = run.log.find("robot at rest after");
   const auto deactivated = run.log.find("hardware sim deactivated");
