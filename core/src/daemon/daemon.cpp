@@ -21,6 +21,7 @@
 #include "loop_requests.hpp"
 #include "plugin_set.hpp"
 #include "reload_plan.hpp"
+#include "reload_swap.hpp"
 #include "request_router.hpp"
 #include "run_recorder.hpp"
 #include "script_source.hpp"
@@ -334,56 +335,15 @@ ReloadResult Daemon::reload(const std::string& trigger) {
     std::string fresh_model_text = read_text(fresh.robot_model_path);
     const ReloadPlan plan = plan_reload(config_, robot_model_text_, fresh, fresh_model_text);
 
-    if (plan.swap_model) {
-      if (const std::string problem = model_swap_problem(config_.robot, fresh.robot);
-          !problem.empty()) {
-        throw ConfigError(fresh.robot_model_path + ": " + problem + "; still running on " +
-                          config_.robot_model_path);
-      }
-      if (calibration_ && calibration_->busy()) {
-        throw PluginError("robot_model: a calibration is running; reload once it has ended");
-      }
-    }
-
     std::vector<std::string> applied;
     if (plan.swap_localization || plan.swap_model) {
-      (void)hot_swap_->collect();
-      if (hot_swap_->busy()) {
-        throw PluginError("the previous swap has not completed yet; try again");
+      if (plan.swap_model && calibration_ && calibration_->busy()) {
+        throw PluginError("robot_model: a calibration is running; reload once it has ended");
       }
-      // Built and validated in full before anything changes: for a new model, a drivetrain
-      // (the running slot) and a localization configured for it; otherwise a localization
-      // for the model in effect.
-      const RobotModel& robot = plan.swap_model ? fresh.robot : config_.robot;
-      HotSwap::Incoming next;
-      next.localization =
-          make_localization(loader_, fresh, robot, config_.period_s(), loop_->latest().estimate);
-      next.localization_slot = fresh.localization;
-      if (plan.swap_model) {
-        next.drivetrain = make_drivetrain(loader_, config_, fresh.robot);
-        next.model = rt::model_settings(fresh.robot);
-      }
-      // Applied first: its hand-over may refuse, and a new model waits for the robot at rest.
+      // Applied first: a hand-over may refuse, and a new model waits for the robot at rest.
       const std::string outgoing = config_.localization.plugin;
-      std::string refusal;
-      const HotSwap::Result swapped = hot_swap_->exchange(std::move(next), kSwapWaitS, &refusal);
-      if (swapped == HotSwap::Result::kNotAtRest) {
-        throw PluginError(fmt::format(
-            "robot_model: applies with the robot at rest; it did not come to rest within {:g} s "
-            "(stop it and reload again); still running on {}",
-            kSwapWaitS, config_.robot_model_path));
-      }
-      if (swapped == HotSwap::Result::kRefused) {
-        throw PluginError(fresh.localization.where + " plugin '" + fresh.localization.plugin +
-                          "' refused the hand-over: " + refusal + "; '" + outgoing +
-                          "' stays active" +
-                          (plan.swap_model ? " and robot_model stays " + config_.robot_model_path
-                                           : std::string()));
-      }
-      if (plan.swap_model && swapped != HotSwap::Result::kTaken) {
-        throw PluginError("robot_model: the loop did not take the new model; still running on " +
-                          config_.robot_model_path);
-      }
+      const HotSwap::Result swapped = apply_reload_swap(
+          *hot_swap_, loader_, {config_, fresh, plan, loop_->latest().estimate, kSwapWaitS});
       if (plan.swap_model) {
         apply_robot_model(fresh, std::move(fresh_model_text));
         applied.push_back("robot_model " + config_.robot_model_path + " (drivetrain " +
@@ -405,7 +365,7 @@ ReloadResult Daemon::reload(const std::string& trigger) {
     if (plan.status_period_s) {
       status_period_s_ = *plan.status_period_s;
       config_.status_period_s = *plan.status_period_s;
-      applied.push_back("status.period_s");
+      applied.emplace_back("status.period_s");
     }
     result.ok = true;
     result.restart_required = !plan.restart.empty();
