@@ -16,10 +16,10 @@
 namespace swivel::daemon {
 namespace {
 
-const std::string kConfigDir = SWIVEL_SOURCE_DIR "/config";
+const std::string config_dir = SWIVEL_SOURCE_DIR "/config";
 
 std::string shipped_text() {
-  std::ifstream in(kConfigDir + "/swiveld.yaml");
+  std::ifstream in(config_dir + "/swiveld.yaml");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
@@ -31,15 +31,15 @@ DaemonConfig edited(const std::string& from, const std::string& to) {
   const auto at = text.find(from);
   EXPECT_NE(at, std::string::npos) << from;
   if (at != std::string::npos) text.replace(at, from.size(), to);
-  return parse_daemon_config(text, "swiveld.yaml", kConfigDir);
+  return parse_daemon_config(text, "swiveld.yaml", config_dir);
 }
 
-DaemonConfig shipped() { return parse_daemon_config(shipped_text(), "swiveld.yaml", kConfigDir); }
+DaemonConfig shipped() { return parse_daemon_config(shipped_text(), "swiveld.yaml", config_dir); }
 
-const std::string kModel = "name: docent\n";
+const std::string model_text = "name: docent\n";
 
-ReloadPlan plan_for(const DaemonConfig& fresh, const std::string& fresh_model = kModel) {
-  return plan_reload(shipped(), kModel, fresh, fresh_model);
+ReloadPlan plan_for(const DaemonConfig& fresh, const std::string& fresh_model = model_text) {
+  return plan_reload(shipped(), model_text, fresh, fresh_model);
 }
 
 TEST(ReloadPlan, AnUnchangedConfigurationChangesNothing) {
@@ -109,8 +109,8 @@ TEST(ReloadPlan, AnEditedRobotModelFileIsSwappedLiveUnderTheSamePath) {
 
 TEST(ReloadPlan, AnotherRobotModelPathIsAModelSwap) {
   // Whether the running robot can take that model is model_swap_problem()'s to say.
-  const ReloadPlan plan =
-      plan_for(edited("robot_model: robots/docent.yaml", "robot_model: robots/swpc4.yaml"), kModel);
+  const ReloadPlan plan = plan_for(
+      edited("robot_model: robots/docent.yaml", "robot_model: robots/swpc4.yaml"), model_text);
   EXPECT_TRUE(plan.swap_model);
   EXPECT_TRUE(plan.restart.empty());
 }
@@ -123,8 +123,8 @@ TEST(ReloadPlan, AModelChangeTogetherWithALocalizationChangeSwapsBoth) {
 }
 
 TEST(ReloadPlan, AModelTheRunningRobotCannotTakeIsNamed) {
-  const RobotModel docent = load_robot_model(kConfigDir + "/robots/docent.yaml");
-  const RobotModel swpc4 = load_robot_model(kConfigDir + "/robots/swpc4.yaml");
+  const RobotModel docent = load_robot_model(config_dir + "/robots/docent.yaml");
+  const RobotModel swpc4 = load_robot_model(config_dir + "/robots/swpc4.yaml");
   RobotModel wider = docent;
   wider.differential.track_width_m *= 1.04;
   wider.differential.wheel_radius_left_m = 0.08;
@@ -160,7 +160,7 @@ TEST(ReloadPlan, LiveAndRestartChangesAreReportedTogetherInReferenceOrder) {
                                                         {"level: info", "level: warn"}}) {
     text.replace(text.find(from), from.size(), to);
   }
-  const ReloadPlan plan = plan_for(parse_daemon_config(text, "swiveld.yaml", kConfigDir));
+  const ReloadPlan plan = plan_for(parse_daemon_config(text, "swiveld.yaml", config_dir));
   EXPECT_TRUE(plan.swap_localization);
   EXPECT_EQ(plan.log_level, "warn");
   EXPECT_EQ(plan.restart, (std::vector<std::string>{"loop.rate_hz", "dds"}));

@@ -169,7 +169,7 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   // Not taken while the robot drives.
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_TRUE(loop.swap_pending());
-  EXPECT_EQ(loop.latest().model_swaps, 0u);
+  EXPECT_EQ(loop.latest().model_swaps, 0U);
   hold_still.store(true, std::memory_order_release);
   rt::LoopSwap* retired = loop.take_retired_swap();
   for (int i = 0; i < 10000 && retired == nullptr; ++i) {
@@ -191,12 +191,12 @@ TEST_P(HotSwapAllocation, RealPluginsSwapWithoutAllocationOnTheLoopThread) {
   loop_thread.join();
 
   EXPECT_GE(cycles_armed, kCycles);
-  EXPECT_EQ(counts.allocations, 0u)
+  EXPECT_EQ(counts.allocations, 0U)
       << "first allocation: " << counts.first_allocation_bytes << " bytes";
-  EXPECT_EQ(counts.deallocations, 0u);
+  EXPECT_EQ(counts.deallocations, 0U);
   const StateSnapshot last = loop.latest();
-  EXPECT_EQ(last.localization_swaps, 4u);
-  EXPECT_EQ(last.model_swaps, 1u);
+  EXPECT_EQ(last.localization_swaps, 4U);
+  EXPECT_EQ(last.model_swaps, 1U);
   // The new model's limits apply: the 0.3 m/s command is held at its speed limit.
   EXPECT_NEAR(fastest_after_model_swap_mps, kNewModelSpeedLimitMps, 1e-9);
   EXPECT_EQ(last.fault, FaultCode::kNone) << fault_code_name(last.fault);

@@ -73,7 +73,7 @@ class Child {
                              std::to_string(getpid()) + "_" + std::to_string(counter++);
     out_ = base + ".out";
     err_ = base + ".err";
-    pid_ = fork();
+    pid_ = fork();  // NOLINT(cppcoreguidelines-prefer-member-initializer): after the files
     if (pid_ == 0) {
       const int out = open(out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       const int err = open(err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

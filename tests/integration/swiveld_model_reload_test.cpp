@@ -32,7 +32,7 @@ std::string write_model(const std::string& dir, const std::string& model,
   std::string text = read_text(source_dir() + "/config/robots/" + model + ".yaml");
   const std::string name = "name: " + model;
   text.replace(text.find(name), name.size(), "name: " + robot);
-  const std::string path = dir + "/" + robot + ".yaml";
+  std::string path = dir + "/" + robot + ".yaml";
   std::ofstream(path) << text;
   return path;
 }

@@ -73,6 +73,7 @@ TEST(SnapshotBufferStress, ReadersNeverSeeTornOrOlderValues) {
   std::array<std::uint64_t, kReaders> torn{};
   std::array<std::uint64_t, kReaders> backwards{};
   std::vector<std::thread> readers;
+  readers.reserve(kReaders);
   for (int r = 0; r < kReaders; ++r) {
     readers.emplace_back([&, r] {
       std::uint64_t last = 0;

@@ -53,7 +53,7 @@ TEST(SpscRing, WrapsAroundManyTimes) {
       ASSERT_TRUE(ring.try_pop(out));
       EXPECT_EQ(out, next_pop++);
     }
-    if (ring.size_approx() == ring.capacity()) {
+    if (ring.size_approx() == decltype(ring)::capacity()) {
       std::uint64_t out = 0;
       while (ring.try_pop(out)) EXPECT_EQ(out, next_pop++);
     }

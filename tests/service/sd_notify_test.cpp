@@ -19,8 +19,8 @@ namespace {
 // Plays systemd's part: a datagram socket bound where NOTIFY_SOCKET points.
 class FakeSystemd {
  public:
-  explicit FakeSystemd(std::string path) : path_(std::move(path)) {
-    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  explicit FakeSystemd(std::string path)
+      : path_(std::move(path)), fd_(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0)) {
     if (fd_ < 0) throw std::runtime_error("socket");
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
@@ -34,13 +34,15 @@ class FakeSystemd {
       throw std::runtime_error("bind " + path_ + ": " + std::strerror(errno));
     }
   }
+  FakeSystemd(const FakeSystemd&) = delete;
+  FakeSystemd& operator=(const FakeSystemd&) = delete;
   ~FakeSystemd() {
     ::close(fd_);
     if (path_[0] == '/') ::unlink(path_.c_str());
   }
 
   /// The next datagram, or "<none>" after 5 s.
-  std::string receive() const {
+  [[nodiscard]] std::string receive() const {
     pollfd p{fd_, POLLIN, 0};
     if (::poll(&p, 1, 5000) != 1) return "<none>";
     char buffer[4096];
@@ -73,8 +75,8 @@ TEST(SdNotify, SendsTheServiceLifecycleOnAPathSocket) {
   EXPECT_EQ(systemd.receive(), "WATCHDOG=1");
   EXPECT_TRUE(notifier.reloading());
   const std::string reloading = systemd.receive();
-  EXPECT_EQ(reloading.rfind("RELOADING=1\nMONOTONIC_USEC=", 0), 0u) << reloading;
-  EXPECT_GT(std::stoull(reloading.substr(std::strlen("RELOADING=1\nMONOTONIC_USEC="))), 0u);
+  EXPECT_EQ(reloading.rfind("RELOADING=1\nMONOTONIC_USEC=", 0), 0U) << reloading;
+  EXPECT_GT(std::stoull(reloading.substr(std::strlen("RELOADING=1\nMONOTONIC_USEC="))), 0U);
   EXPECT_TRUE(notifier.ready());
   EXPECT_EQ(systemd.receive(), "READY=1");
   EXPECT_TRUE(notifier.status("two\nlines"));

@@ -67,7 +67,8 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   dxl::Bus bus(port);
   const std::vector<std::uint8_t> ids = ids_for(c.servos);
   const bool steering = c.servos > 2;
-  std::vector<std::uint8_t> wheels, steers;
+  std::vector<std::uint8_t> wheels;
+  std::vector<std::uint8_t> steers;
   for (std::size_t i = 0; i < ids.size(); ++i)
     (steering && i % 2 == 1 ? steers : wheels).push_back(ids[i]);
   std::vector<std::uint8_t> goals(4 * ids.size(), 0);
@@ -238,7 +239,8 @@ int run_hardware(const HardwareSettings& s) {
               floor.max_us(), "-");
   for (const Case& c : cases) {
     rt::TimingReport t;
-    std::string end_state, why;
+    std::string end_state;
+    std::string why;
     char label[64];
     std::snprintf(label, sizeof label, "loop, %zu servos @ %.0f Mbps", c.servos, c.baud / 1e6);
     if (!loop_lateness(s, c, t, end_state, why)) {

@@ -26,7 +26,7 @@ std::string format(const char* fmt, Args... args) {
     const int n = std::snprintf(buffer.data(), buffer.size(), fmt, args...);
     if (n < 0) return {};
     if (static_cast<std::size_t>(n) < buffer.size()) {
-      return std::string(buffer.data(), static_cast<std::size_t>(n));
+      return {buffer.data(), static_cast<std::size_t>(n)};
     }
     buffer.resize(static_cast<std::size_t>(n) + 1);
   }

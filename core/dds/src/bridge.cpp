@@ -43,7 +43,12 @@ swivel_msg_TimingStats to_msg(const TimingPercentiles& p) {
   return {p.p50_us, p.p99_us, p.p999_us, p.max_us};
 }
 
+// idlc's C types hold strings as char*, in samples that are only written too: Cyclone reads
+// through the pointer and never writes.
+// NOLINTBEGIN(cppcoreguidelines-pro-type-const-cast)
 char* c_str(const std::string& s) { return const_cast<char*>(s.c_str()); }
+char* c_str(const char* s) { return const_cast<char*>(s); }
+// NOLINTEND(cppcoreguidelines-pro-type-const-cast)
 
 // CLOCK_REALTIME now, ns: ROS time for what the bridge stamps itself (diagnostics, the
 // stale check of stamped commands); loop samples carry the loop's own mapping.
@@ -113,8 +118,10 @@ struct DdsBridge::Entities {
   std::deque<std::uint64_t> reply_ids;
 };
 
-DdsBridge::DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbacks callbacks)
-    : options_(options), robot_id_(std::move(robot_id)), callbacks_(std::move(callbacks)) {
+DdsBridge::DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks callbacks)
+    : options_(std::move(options)),
+      robot_id_(std::move(robot_id)),
+      callbacks_(std::move(callbacks)) {
   if (robot_id_.empty()) throw std::invalid_argument("DdsBridge: empty robot id");
   if (!callbacks_.read_state) throw std::invalid_argument("DdsBridge: read_state is required");
 
@@ -356,7 +363,7 @@ void DdsBridge::publish_state(const StateSnapshot& s) {
   state.localization_swaps = s.localization_swaps;
   state.mode = to_msg(s.mode);
   state.fault_code = static_cast<std::uint16_t>(s.fault);
-  state.fault_text = const_cast<char*>(fault_code_name(s.fault));
+  state.fault_text = c_str(fault_code_name(s.fault));
   FaultDetail detail = s.fault_detail;
   detail.back() = '\0';
   state.fault_detail = detail.data();
@@ -445,9 +452,9 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
     const std::uint32_t modules = std::min(s.module_count, kMaxModules);
     const auto wheels = std::min<std::size_t>(options_.ros2.wheel_joints.size(), modules);
     const auto steering = std::min<std::size_t>(options_.ros2.steering_joints.size(), modules);
-    std::array<char*, 2 * kMaxModules> names{};
-    std::array<double, 2 * kMaxModules> position{};
-    std::array<double, 2 * kMaxModules> velocity{};
+    std::array<char*, std::size_t{2} * kMaxModules> names{};
+    std::array<double, std::size_t{2} * kMaxModules> position{};
+    std::array<double, std::size_t{2} * kMaxModules> velocity{};
     std::size_t n = 0;
     for (std::size_t i = 0; i < wheels; ++i, ++n) {
       names[n] = c_str(options_.ros2.wheel_joints[i]);
@@ -465,7 +472,7 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
     sensor_msgs_msg_dds__JointState_ joints{};
     joints.header.stamp.sec = ros_stamp.sec;
     joints.header.stamp.nanosec = ros_stamp.nanosec;
-    joints.header.frame_id = const_cast<char*>("");
+    joints.header.frame_id = c_str("");
     const auto length = static_cast<std::uint32_t>(n);
     borrow(joints.name, names.data(), length);
     borrow(joints.position, position.data(), length);
@@ -487,7 +494,7 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.overruns = d.overruns;
   msg.fault_count = d.fault_count;
   msg.fault_code = static_cast<std::uint16_t>(d.fault);
-  msg.fault_text = const_cast<char*>(fault_code_name(d.fault));
+  msg.fault_text = c_str(fault_code_name(d.fault));
   msg.fault_detail = c_str(d.fault_detail);
   msg.commands_received = commands_received_.load(std::memory_order_relaxed);
   msg.commands_dropped = commands_dropped_.load(std::memory_order_relaxed);
@@ -586,7 +593,7 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
   const rt::RosTime now = rt::to_ros_time(realtime_now_ns());
   array.header.stamp.sec = now.sec;
   array.header.stamp.nanosec = now.nanosec;
-  array.header.frame_id = const_cast<char*>("");
+  array.header.frame_id = c_str("");
   borrow(array.status, &status, 1);
   check(dds_write(dds_->ros2_diagnostics_writer, &array), "dds_write(ros2 diagnostics)");
 }
@@ -627,8 +634,8 @@ void DdsBridge::publish_reply(const ReplySample& reply) {
     swivel_msg_Reply oldest{};
     oldest.robot_id = c_str(robot_id_);
     oldest.request_id = dds_->reply_ids.front();
-    oldest.verb = const_cast<char*>("");
-    oldest.text = const_cast<char*>("");
+    oldest.verb = c_str("");
+    oldest.text = c_str("");
     dds_->reply_ids.pop_front();
     (void)dds_unregister_instance(dds_->reply_writer, &oldest);
   }

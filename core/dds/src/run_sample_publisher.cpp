@@ -101,6 +101,8 @@ void RunSamplePublisher::publish(const RunSample& r) {
   msg.cmd_vx_mps = r.command_twist.vx_mps;
   msg.cmd_vy_mps = r.command_twist.vy_mps;
   msg.cmd_wz_radps = r.command_twist.wz_radps;
+  // The sequence lends `values` to Cyclone, whose C type holds a non-const pointer.
+  // NOLINTNEXTLINE(readability-non-const-parameter)
   const auto borrow = [](auto& sequence, double* values, std::uint32_t length) {
     sequence._maximum = length;
     sequence._length = length;

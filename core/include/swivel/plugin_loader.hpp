@@ -55,12 +55,12 @@ class PluginInstance {
     instance_ = nullptr;
     library_.reset();
   }
-  Interface* get() const noexcept { return instance_; }
+  [[nodiscard]] Interface* get() const noexcept { return instance_; }
   Interface* operator->() const noexcept { return instance_; }
   Interface& operator*() const noexcept { return *instance_; }
   explicit operator bool() const noexcept { return instance_ != nullptr; }
-  const std::string& name() const noexcept { return name_; }
-  const std::string& path() const noexcept { return path_; }
+  [[nodiscard]] const std::string& name() const noexcept { return name_; }
+  [[nodiscard]] const std::string& path() const noexcept { return path_; }
 
  private:
   std::shared_ptr<PluginLibrary> library_;
@@ -108,8 +108,8 @@ class PluginLoader {
  private:
   std::shared_ptr<PluginLibrary> open(std::uint32_t kind, const std::string& name,
                                       const SwivelPluginDescriptor*& descriptor, std::string& path);
-  std::shared_ptr<PluginLibrary> open_file(std::uint32_t kind, const std::string& file,
-                                           const SwivelPluginDescriptor*& descriptor);
+  static std::shared_ptr<PluginLibrary> open_file(std::uint32_t kind, const std::string& file,
+                                                  const SwivelPluginDescriptor*& descriptor);
   static void* instantiate(const SwivelPluginDescriptor& descriptor, const std::string& path);
 
   std::vector<std::string> search_path_;

@@ -27,11 +27,11 @@ std::string progress_text(const CalibrationProgress& p) {
 }  // namespace
 
 CalibrationRunner::CalibrationRunner(rt::ControlLoop& loop, PluginLoader& loader,
-                                     const RobotModel& nominal, std::string model_path,
+                                     RobotModel nominal, std::string model_path,
                                      PluginContext context, std::string plugin, Publish publish)
     : loop_(loop),
       loader_(loader),
-      nominal_(nominal),
+      nominal_(std::move(nominal)),
       model_path_(std::move(model_path)),
       context_(std::move(context)),
       plugin_name_(std::move(plugin)),
@@ -54,6 +54,8 @@ CalibrationRunner::~CalibrationRunner() {
     }
     if (back == nullptr) {
       std::fprintf(stderr, "swiveld: the loop did not hand the calibration back; leaking it\n");
+      // Deliberately leaked: destroying it could free what the loop still runs.
+      // NOLINTNEXTLINE(bugprone-unhandled-exception-at-new)
       (void)new PluginInstance<Calibration>(std::move(instance_));
       return;
     }
@@ -133,7 +135,7 @@ void CalibrationRunner::handle_request(const std::string& argument) {
     publish_locked();
   } else {
     std::lock_guard lock(mutex_);
-    if (argument != "status" && argument != "") {
+    if (argument != "status" && !argument.empty()) {
       dds::CalibrationSample answer = status_;
       answer.text = "unknown calibrate argument '" + argument + "' (start | cancel | status)";
       if (publish_) publish_(answer);

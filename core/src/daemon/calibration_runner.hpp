@@ -38,7 +38,7 @@ class CalibrationRunner {
   /// Not real-time safe. `nominal` and `context` are copied; `context.robot` is replaced by
   /// the copy of `nominal`. `model_path` is the nominal model's file (the calibrated one is
   /// written where calibration_output_dirs() says).
-  CalibrationRunner(rt::ControlLoop& loop, PluginLoader& loader, const RobotModel& nominal,
+  CalibrationRunner(rt::ControlLoop& loop, PluginLoader& loader, RobotModel nominal,
                     std::string model_path, PluginContext context,
                     std::string plugin = "swpc_geometric", Publish publish = {});
   ~CalibrationRunner();

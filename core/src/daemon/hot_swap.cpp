@@ -29,6 +29,9 @@ bool HotSwap::busy() const noexcept {
   return incoming_.localization || (loop_ != nullptr && loop_->swap_pending());
 }
 
+// Copying the slot may allocate: only std::bad_alloc can escape, which ends the process
+// wherever it happens.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 HotSwap::Result HotSwap::collect(std::string* refusal) noexcept {
   if (loop_ == nullptr || !incoming_.localization) return Result::kPending;
   const rt::LoopSwap* retired = loop_->take_retired_swap();

@@ -26,6 +26,7 @@ class HotSwap {
 
   /// What a swap brings: a localization with its configuration and, for a new robot model,
   /// a drivetrain configured for it with the model's loop settings.
+  // NOLINTNEXTLINE(bugprone-exception-escape): YAML::Node moves by copying, which may allocate
   struct Incoming {
     PluginInstance<Localization> localization;  ///< configured and reset
     PluginConfig localization_slot;
@@ -52,7 +53,7 @@ class HotSwap {
   /// Takes back the instances the loop let go of, if it did: the outgoing ones after a taken
   /// swap (destroyed; the incoming ones become active), or the incoming ones after a refused
   /// hand-over (destroyed; `refusal`, when given, receives the reason).
-  Result collect(std::string* refusal = nullptr) noexcept;
+  Result collect(std::string* refusal = nullptr) noexcept;  // NOLINT(bugprone-exception-escape)
 
   /// True while an earlier swap has not been taken or rolled back.
   [[nodiscard]] bool busy() const noexcept;

@@ -17,7 +17,9 @@
 #include "swivel/daemon/daemon_config.hpp"
 #include "swivel/plugin_loader.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"swiveld: the Swivel robot control daemon"};
   std::string config_file;
   bool check = false;
@@ -75,6 +77,20 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
+  }
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes run() (argument parsing, the logger's set-up) still ends with a message.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swiveld: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "swiveld: unknown exception\n");
   }
   return 1;
 }

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "service_integration.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <utility>
 
@@ -25,17 +27,22 @@ ServiceIntegration::ServiceIntegration(service::Notifier notifier)
     : notifier_(std::move(notifier)) {}
 
 void ServiceIntegration::ready(const std::string& status) {
-  if (notifier_.enabled()) notifier_.ready(status);
+  // Unsent, systemd would time the start out: say why it may.
+  if (notifier_.enabled() && !notifier_.ready(status)) {
+    spdlog::warn("sd_notify: READY=1 could not be sent to {}", notifier_.socket_path());
+  }
 }
 
 void ServiceIntegration::reloading(const std::string& status) {
-  if (notifier_.enabled()) notifier_.reloading(status);
+  if (notifier_.enabled() && !notifier_.reloading(status)) {
+    spdlog::warn("sd_notify: RELOADING=1 could not be sent to {}", notifier_.socket_path());
+  }
 }
 
 void ServiceIntegration::stopping() noexcept {
   if (!notifier_.enabled()) return;
   try {
-    notifier_.stopping();
+    (void)notifier_.stopping();  // on the way out: nobody to tell if it fails
   } catch (...) {
   }
 }
@@ -58,7 +65,8 @@ void ServiceIntegration::tick_watchdog(const rt::ControlLoop* loop, double now_s
   if (loop == nullptr || !notifier_.enabled()) return;
   // Healthy means the loop has run cycles since the last ping.
   const std::uint64_t cycle = loop->latest().cycle;
-  if (cycle > watchdog_cycle_ && loop->running()) notifier_.watchdog();
+  // A lost ping is a missed ping: systemd acts on the next one missing too.
+  if (cycle > watchdog_cycle_ && loop->running()) (void)notifier_.watchdog();
   watchdog_cycle_ = cycle;
 }
 

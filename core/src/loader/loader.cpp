@@ -52,7 +52,7 @@ std::string canonical(const std::string& path) {
   char* resolved = ::realpath(path.c_str(), nullptr);
   if (resolved == nullptr) return path;
   std::string result(resolved);
-  std::free(resolved);
+  std::free(resolved);  // NOLINT(cppcoreguidelines-no-malloc): realpath() mallocs it
   return result;
 }
 
@@ -104,11 +104,13 @@ std::shared_ptr<PluginLibrary> PluginLoader::open(std::uint32_t kind, const std:
   }
   const std::string file = "swivel_" + kind_name + "_" + name + ".so";
   for (const auto& dir : search_path_) {
-    const std::string candidate = dir + "/" + file;
+    std::string candidate = dir;
+    candidate.append("/").append(file);
     if (!is_regular_file(candidate)) continue;
     path = candidate;
     auto library = open_file(kind, candidate, descriptor);
     if (name != descriptor->name) {
+      // NOLINTNEXTLINE(performance-inefficient-string-concatenation): once, on the way out
       throw PluginError(candidate + ": name mismatch: the library declares '" +
                         std::string(descriptor->name) + "', expected '" + name + "'");
     }

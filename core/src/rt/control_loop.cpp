@@ -45,11 +45,8 @@ bool finite(const ActuatorCommand& c) noexcept {
 }
 
 bool finite_covariance(const PoseEstimate& e) noexcept {
-  if (!e.has_covariance) return true;
-  for (const double v : e.covariance) {
-    if (!finite(v)) return false;
-  }
-  return true;
+  return !e.has_covariance ||
+         std::all_of(e.covariance.begin(), e.covariance.end(), [](double v) { return finite(v); });
 }
 
 // What is published: a non-finite covariance goes out as none (robot_localization and Nav2

@@ -8,14 +8,15 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
+#include <system_error>
 
 #include "swivel/clock.hpp"
 
 namespace swivel::rt {
 namespace {
 
-std::string errno_text(int error) { return std::strerror(error); }
+// std::strerror may share one buffer between threads; the error category does not.
+std::string errno_text(int error) { return std::generic_category().message(error); }
 
 }  // namespace
 
@@ -62,7 +63,7 @@ std::string lock_process_memory() {
 void prefault_stack(std::size_t bytes) noexcept {
   // One frame of the full size: every page of it is below the caller's frame, which is the
   // stack the loop will grow into.
-  constexpr std::size_t kMaxBytes = 256 * 1024;
+  constexpr std::size_t kMaxBytes = std::size_t{256} * 1024;
   volatile unsigned char frame[kMaxBytes];
   const std::size_t n = bytes < kMaxBytes ? bytes : kMaxBytes;
   for (std::size_t i = 0; i < n; i += 4096) frame[kMaxBytes - 1 - i] = 0;

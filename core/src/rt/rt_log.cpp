@@ -97,7 +97,7 @@ std::string format_log_record(const LogRecord& r) {
       break;
   }
   if (n < 0) return log_code_name(r.code);
-  return std::string(line, std::min(static_cast<std::size_t>(n), sizeof line - 1));
+  return {line, std::min(static_cast<std::size_t>(n), sizeof line - 1)};
 }
 
 RtLog::RtLog(std::shared_ptr<spdlog::logger> logger) : logger_(std::move(logger)) {}

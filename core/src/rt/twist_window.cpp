@@ -139,7 +139,8 @@ Status TwistWindow::estimate(Drivetrain& drivetrain, TwistEstimate& out) {
   out.twist = increment.twist;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c)
-      out.covariance[static_cast<std::size_t>(3 * r + c)] = covariance(r, c);
+      out.covariance[static_cast<std::size_t>(r) * 3 + static_cast<std::size_t>(c)] =
+          covariance(r, c);
   }
   out.has_covariance = wheel_sigma > 0.0 || steer_sigma > 0.0;
   out.delay_s = newest_s_ - t_c;

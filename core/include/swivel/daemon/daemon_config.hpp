@@ -14,6 +14,7 @@
 namespace swivel::daemon {
 
 /// One plugin slot: `{plugin: NAME, params: {...}}`. The plugin validates its own params.
+// NOLINTNEXTLINE(bugprone-exception-escape): YAML::Node moves by copying, which may allocate
 struct PluginConfig {
   std::string plugin;       ///< plugin name, e.g. "differential"
   YAML::Node params;        ///< the `params:` mapping (null when absent)

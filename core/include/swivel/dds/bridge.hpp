@@ -141,7 +141,7 @@ class DdsBridge {
   /// @param robot_id  the key of every sample this daemon writes and accepts
   /// @throws DdsError when DDS refuses an entity; std::invalid_argument when robot_id is
   ///         empty or read_state is missing.
-  DdsBridge(const DdsOptions& options, std::string robot_id, DdsCallbacks callbacks);
+  DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks callbacks);
   /// Stops the threads and deletes every DDS entity.
   ~DdsBridge();
   DdsBridge(const DdsBridge&) = delete;

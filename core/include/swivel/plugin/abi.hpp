@@ -23,6 +23,8 @@
 #include <cstdio>
 #include <exception>
 
+// The C ABI keeps C's spelling: enumerators in capitals, a typedef for the entry point.
+// NOLINTBEGIN(readability-identifier-naming,modernize-use-using,modernize-redundant-void-arg)
 extern "C" {
 
 #define SWIVEL_PLUGIN_ABI_VERSION 3u
@@ -65,6 +67,7 @@ struct SwivelPluginDescriptor {
 
 typedef const SwivelPluginDescriptor* (*SwivelPluginEntryPoint)(void);
 }
+// NOLINTEND(readability-identifier-naming,modernize-use-using,modernize-redundant-void-arg)
 
 namespace swivel {
 class Hardware;
@@ -74,6 +77,8 @@ class Calibration;
 
 template <class Interface>
 struct PluginKindOf;
+// A type trait's member is `value`, as in the standard library's.
+// NOLINTBEGIN(readability-identifier-naming)
 template <>
 struct PluginKindOf<Hardware> {
   static constexpr std::uint32_t value = SWIVEL_PLUGIN_HARDWARE;
@@ -90,6 +95,7 @@ template <>
 struct PluginKindOf<Calibration> {
   static constexpr std::uint32_t value = SWIVEL_PLUGIN_CALIBRATION;
 };
+// NOLINTEND(readability-identifier-naming)
 
 /// "hardware", "drivetrain", ... for messages.
 inline const char* plugin_kind_name(std::uint32_t kind) {
@@ -108,6 +114,8 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
 /// swivel/plugin/abi_fingerprint.hpp). Use once per library:
 ///   SWIVEL_EXPORT_PLUGIN(swivel::plugins::DifferentialDrivetrain, swivel::Drivetrain,
 ///                        "differential")
+// `Class` and `Interface` are type names, which parentheses would break.
+// NOLINTBEGIN(bugprone-macro-parentheses)
 #define SWIVEL_EXPORT_PLUGIN(Class, Interface, plugin_name)                       \
   extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor* \
   swivel_plugin_descriptor(void) {                                                \
@@ -131,3 +139,4 @@ inline const char* plugin_kind_name(std::uint32_t kind) {
         ::swivel::abi_fingerprint()};                                             \
     return &descriptor;                                                           \
   }
+// NOLINTEND(bugprone-macro-parentheses)

@@ -34,7 +34,7 @@ constexpr SwivelAbiLayout abi_layout(const char* name) {
 
 /// This translation unit's fingerprint (one static per library).
 inline const SwivelAbiFingerprint* abi_fingerprint() {
-  static constexpr std::array<SwivelAbiLayout, 13> layouts{
+  static constexpr std::array<SwivelAbiLayout, 13> kLayouts{
       abi_layout<Pose2>("Pose2"),
       abi_layout<Twist2>("Twist2"),
       abi_layout<PoseEstimate>("PoseEstimate"),
@@ -49,10 +49,10 @@ inline const SwivelAbiFingerprint* abi_fingerprint() {
       abi_layout<std::string>("std::string"),
       abi_layout<std::vector<double>>("std::vector<double>"),
   };
-  static constexpr SwivelAbiFingerprint fingerprint{
+  static constexpr SwivelAbiFingerprint kFingerprint{
       static_cast<std::uint32_t>(__GXX_ABI_VERSION), SWIVEL_CXX11_STRING_ABI,
-      static_cast<std::uint32_t>(layouts.size()), layouts.data()};
-  return &fingerprint;
+      static_cast<std::uint32_t>(kLayouts.size()), kLayouts.data()};
+  return &kFingerprint;
 }
 
 /// "" when `plugin` matches this translation unit's fingerprint, else what differs first,

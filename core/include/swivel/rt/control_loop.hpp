@@ -194,6 +194,9 @@ enum class CalibrationOutcome : std::uint8_t {
   kRefused = 4,    ///< a fault was latched when the loop would have started it
 };
 
+// Its buffers are cache-line aligned so that the loop and the other threads do not share
+// lines: the padding is the point.
+// NOLINTNEXTLINE(clang-analyzer-optin.performance.Padding)
 class ControlLoop {
  public:
   /// Not real-time safe. The plugins must be configured and the localization reset; they
@@ -386,6 +389,8 @@ class ControlLoop {
   void run_cycle(double now_s) noexcept;
 
   /// Any thread. Real-time safe. CLOCK_MONOTONIC, seconds: the clock of `received_s`.
+  // A member, so that callers read the loop's clock through the loop.
+  // NOLINTNEXTLINE(readability-convert-member-functions-to-static)
   [[nodiscard]] double now_s() const noexcept { return monotonic_s(); }
 
   /// Any thread. The offset that maps the loop's stamps to ROS time

@@ -27,6 +27,7 @@ class LatestValue {
 
  public:
   LatestValue() noexcept = default;
+  ~LatestValue() = default;
   LatestValue(const LatestValue&) = delete;
   LatestValue& operator=(const LatestValue&) = delete;
 

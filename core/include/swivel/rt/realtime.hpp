@@ -34,7 +34,7 @@ std::string lock_process_memory();
 /// Not real-time safe (set-up). Touches `bytes` of the calling thread's stack so that its
 /// pages are resident before the loop needs them (with locked memory they then stay).
 /// At most 256 KiB.
-void prefault_stack(std::size_t bytes = 128 * 1024) noexcept;
+void prefault_stack(std::size_t bytes = std::size_t{128} * 1024) noexcept;
 
 /// Holds /dev/cpu_dma_latency at a target (0 us: no deep C-states) while alive, which is how
 /// the kernel's PM QoS interface is used: the request lasts as long as the file is open.

@@ -29,6 +29,7 @@ class SnapshotBuffer {
   explicit SnapshotBuffer(const T& initial = T{}) noexcept {
     store_words(initial, std::memory_order_relaxed);
   }
+  ~SnapshotBuffer() = default;
   SnapshotBuffer(const SnapshotBuffer&) = delete;
   SnapshotBuffer& operator=(const SnapshotBuffer&) = delete;
 
@@ -62,7 +63,7 @@ class SnapshotBuffer {
   /// (not wait-free): a reader can only be delayed by writes, which take well under a
   /// microsecond each.
   [[nodiscard]] T read() const noexcept {
-    T out;
+    T out;  // NOLINT(cppcoreguidelines-pro-type-member-init): try_read() writes all of it
     while (!try_read(out)) {
     }
     return out;

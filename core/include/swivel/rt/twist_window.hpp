@@ -93,7 +93,7 @@ class TwistWindow {
   std::array<double, kMaxTwistWindowReadings> stamps_{};
   // Channel i < kMaxModules: wheel i; kMaxModules + i: steering i (unwrapped). Filled slots
   // are [0, count_): the fit does not depend on their order.
-  std::array<Column, 2 * kMaxModules> channels_{};
+  std::array<Column, std::size_t{2} * kMaxModules> channels_{};
   std::size_t count_ = 0;
   std::size_t next_ = 0;
   std::uint32_t module_count_ = 0;
@@ -104,8 +104,8 @@ class TwistWindow {
   // The fitted readings handed to the drivetrain (members: large, kept off the loop's stack).
   HardwareState before_{};
   HardwareState after_{};
-  std::array<double, 2 * kMaxModules> slopes_{};
-  std::array<double, 2 * kMaxModules> means_{};
+  std::array<double, std::size_t{2} * kMaxModules> slopes_{};
+  std::array<double, std::size_t{2} * kMaxModules> means_{};
 };
 
 }  // namespace swivel::rt

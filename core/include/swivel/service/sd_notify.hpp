@@ -34,19 +34,19 @@ class Notifier {
   [[nodiscard]] const std::string& socket_path() const { return path_; }
 
   /// Sends `state` (newline-separated assignments) as one datagram; true when sent.
-  bool notify(std::string_view state) const noexcept;
+  [[nodiscard]] bool notify(std::string_view state) const noexcept;
 
   /// "READY=1", optionally with "STATUS=<status>".
-  bool ready(std::string_view status = {}) const;
+  [[nodiscard]] bool ready(std::string_view status = {}) const;
   /// "RELOADING=1" with "MONOTONIC_USEC=<now>" (as systemd 253+ expects); follow with
   /// ready() when the reload is done.
-  bool reloading(std::string_view status = {}) const;
+  [[nodiscard]] bool reloading(std::string_view status = {}) const;
   /// "STOPPING=1".
-  bool stopping(std::string_view status = {}) const;
+  [[nodiscard]] bool stopping(std::string_view status = {}) const;
   /// "WATCHDOG=1": send it only while the daemon is healthy (the loop runs).
-  bool watchdog() const noexcept;
+  [[nodiscard]] bool watchdog() const noexcept;
   /// "STATUS=<text>" (newlines in `text` are replaced by spaces).
-  bool status(std::string_view text) const;
+  [[nodiscard]] bool status(std::string_view text) const;
 
  private:
   std::string path_;
