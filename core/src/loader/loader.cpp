@@ -13,7 +13,7 @@
 #include "swivel/plugin_loader.hpp"
 
 #ifndef SWIVEL_PLUGIN_INSTALL_DIR
-#define SWIVEL_PLUGIN_INSTALL_DIR "/usr/local/lib/swivel/plugins"
+#error "SWIVEL_PLUGIN_INSTALL_DIR comes from core/src/loader/CMakeLists.txt"
 #endif
 
 namespace swivel {
