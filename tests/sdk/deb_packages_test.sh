@@ -3,7 +3,8 @@
 # Usage: deb_packages_test.sh BUILD_DIR CPACK
 # Builds the two Debian packages from this build, checks what each holds and declares, then
 # unpacks swivel into an empty root and runs the daemon from there, with the configuration,
-# plugins and DDS file the package installed.
+# plugins and DDS file the package installed. Installing it with apt on a clean Debian 12 and
+# starting it as its unit does is tools/deb-clean-install (root and the network: not a test).
 set -euo pipefail
 build=$1 cpack=$2
 work=$(mktemp -d)
