@@ -110,9 +110,10 @@ std::shared_ptr<PluginLibrary> PluginLoader::open(std::uint32_t kind, const std:
     path = candidate;
     auto library = open_file(kind, candidate, descriptor);
     if (name != descriptor->name) {
-      // NOLINTNEXTLINE(performance-inefficient-string-concatenation): once, on the way out
+      // Once, on the way out. NOLINTBEGIN(performance-inefficient-string-concatenation)
       throw PluginError(candidate + ": name mismatch: the library declares '" +
                         std::string(descriptor->name) + "', expected '" + name + "'");
+      // NOLINTEND(performance-inefficient-string-concatenation)
     }
     return library;
   }
