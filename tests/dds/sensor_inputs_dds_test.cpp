@@ -21,6 +21,7 @@
 
 #include "dds_test_util.hpp"
 #include "fake_plugins.hpp"
+#include "ros2_imu_publisher.hpp"
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/dds/bridge.hpp"
@@ -31,6 +32,7 @@
 namespace swivel::dds {
 namespace {
 
+using test::ImuPublisher;
 using test::publication_matched;
 using test::take_one;
 using test::unique_robot_id;
@@ -132,42 +134,6 @@ class StateReader {
  private:
   std::string robot_;
   dds_entity_t reader_ = 0;
-};
-
-// A ROS 2 driver's IMU publisher on its own participant.
-class ImuPublisher {
- public:
-  ImuPublisher(const Participant& client, const std::string& topic, bool reliable) {
-    const dds_entity_t t =
-        create_topic(client.handle(), &sensor_msgs_msg_dds__Imu__desc, topic.c_str());
-    const QosPtr qos = reliable ? default_qos(10) : best_effort_qos(10);
-    writer_ = dds_create_writer(client.handle(), t, qos.get(), nullptr);
-  }
-  [[nodiscard]] bool matched() const { return publication_matched(writer_); }
-  void write(double wx, double wy, double wz) const {
-    std::string frame = "imu_link";
-    sensor_msgs_msg_dds__Imu_ m{};
-    m.header.frame_id = frame.data();
-    m.orientation.w = 1.0;
-    m.orientation_covariance[0] = -1.0;  // no orientation, as many gyro-only drivers send
-    m.angular_velocity = {wx, wy, wz};
-    m.linear_acceleration = {0.0, 0.0, 9.81};
-    ASSERT_EQ(dds_write(writer_, &m), DDS_RETCODE_OK);
-  }
-  // Publishes at 200 Hz until `done` or the timeout.
-  bool stream_until(double wx, double wy, double wz, const std::function<bool()>& done,
-                    std::chrono::milliseconds timeout = 10s) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      write(wx, wy, wz);
-      if (done()) return true;
-      std::this_thread::sleep_for(5ms);
-    }
-    return false;
-  }
-
- private:
-  dds_entity_t writer_ = 0;
 };
 
 void check_gyro_follows(bool reliable, std::array<double, 3> rpy, double wx, double wy, double wz,

@@ -20,9 +20,10 @@ inline constexpr auto kDiscoveryTimeout = std::chrono::seconds(10);
 
 // Run outside ctest (no CYCLONEDDS_URI), the tests and the swivelctl they start still stay
 // on loopback.
-inline const bool kLoopbackOnly = [] {
+inline const bool loopback_only = [] {
   const std::string uri = tool_config_uri();
-  if (!uri.empty()) ::setenv("CYCLONEDDS_URI", uri.c_str(), 0);
+  // At static initialisation, before the test starts a thread.
+  if (!uri.empty()) ::setenv("CYCLONEDDS_URI", uri.c_str(), 0);  // NOLINT(concurrency-mt-unsafe)
   return true;
 }();
 
