@@ -6,86 +6,36 @@
 // of every servo off.
 
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <sys/wait.h>
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
+#include <csignal>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "dynamixel_daemon_config.hpp"
 #include "process_util.hpp"
 #include "swivel/dynamixel/emulator.hpp"
 #include "swivel/dynamixel/protocol.hpp"
+#include "swiveld_status_lines.hpp"
 
 namespace {
 
 namespace dxl = swivel::dynamixel;
 using swivel::test::Child;
+using swivel::test::docent_params;
 using swivel::test::make_test_dir;
-using swivel::test::source_dir;
+using swivel::test::servo_ids;
+using swivel::test::status_lines;
+using swivel::test::StatusLine;
 using swivel::test::swiveld_exe;
+using swivel::test::write_config;
 using namespace std::chrono_literals;
 
-struct Status {
-  double t_s = 0.0, x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;
-  std::string line;
-};
-
-std::vector<Status> status_lines(const std::string& out) {
-  std::vector<Status> lines;
-  std::istringstream in(out);
-  for (std::string line; std::getline(in, line);) {
-    Status s;
-    if (std::sscanf(line.c_str(), "t=%lfs pose x=%lf m y=%lf m yaw=%lf rad", &s.t_s, &s.x_m, &s.y_m,
-                    &s.yaw_rad) == 4) {
-      s.line = line;
-      lines.push_back(s);
-    }
-  }
-  return lines;
-}
-
-// A configuration file for `robot` (docent or swpc4) with the given hardware params and
-// motion script; returns its path.
-std::string write_config(const std::string& dir, const std::string& robot,
-                         const std::string& hardware_params, const std::string& script) {
-  const bool differential = robot == "docent";
-  std::ostringstream c;
-  c << "loop: {rate_hz: 500, realtime: false}\n"
-    << "robot_model: " << source_dir() << "/config/robots/" << robot << ".yaml\n"
-    << "hardware:\n  plugin: dynamixel\n  params: " << hardware_params << "\n"
-    << "drivetrain:\n  plugin: " << (differential ? "differential" : "swpc") << "\n"
-    << "  params: {max_wheel_rate_radps: 20.0"
-    << (differential ? "" : ", max_steer_rate_radps: 6.0") << "}\n"
-    << "localization: {plugin: raw_eg, params: {heading_source: encoders}}\n"
-    << "command:\n  timeout_s: 0.5\n  source: script\n  script:\n"
-    << script << "logging: {level: info}\nstatus: {period_s: 0.1}\n";
-  const std::string path = dir + "/swiveld.yaml";
-  std::ofstream(path) << c.str();
-  return path;
-}
-
-// Reply timeout and stale limit generous enough for a loaded test machine (the emulator is
-// an ordinary thread).
-std::string docent_params(const std::string& port) {
-  return "{port: " + port +
-         ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, left: {id: 1}, right: {id: 2, "
-         "direction: -1}}";
-}
-
-const char* kArc = "    - {vx_mps: 0.2, wz_radps: 0.3, duration_s: 600}\n";
-
-dxl::Emulator::Options servo_ids(std::vector<std::uint8_t> ids) {
-  dxl::Emulator::Options o;
-  o.ids = std::move(ids);
-  return o;
-}
+constexpr const char* kArc = "    - {vx_mps: 0.2, wz_radps: 0.3, duration_s: 600}\n";
 
 // Every ID's last Torque Enable write is 0, made at or after `after_s` (CLOCK_MONOTONIC).
 void expect_torque_off(const dxl::Emulator& emulator, const std::vector<std::uint8_t>& ids,
@@ -133,7 +83,7 @@ TEST(SwiveldDynamixel, DocentDrivesTheArcAndSigtermSwitchesTheTorqueOff) {
 
   const auto lines = status_lines(daemon.out());
   ASSERT_GE(lines.size(), 15U) << daemon.out();
-  const Status& last = lines.back();
+  const StatusLine& last = lines.back();
   EXPECT_NE(last.line.find("fault none"), std::string::npos) << last.line;
   // On the arc (radius 0.2/0.3) as far as the time allows, less a start-up delay.
   const double r = 0.2 / 0.3;
@@ -173,7 +123,7 @@ TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueO
 
   const auto lines = status_lines(daemon.out());
   ASSERT_GE(lines.size(), 20U) << daemon.out();
-  const Status& last = lines.back();
+  const StatusLine& last = lines.back();
   EXPECT_NE(last.line.find("fault none"), std::string::npos) << last.line << "\n" << daemon.err();
   // 2 s forward at 0.2 m/s, then sideways: about 0.4 m ahead (less the casters turning at
   // the start) and moving left, without rotating.
