@@ -7,7 +7,8 @@
 //           and for ROS 2's rt/<robot>/odom and rt/tf (header stamps in ROS time, against
 //           the client's CLOCK_REALTIME)
 //   floor = one-way DDS latency, half the round trip of a ping-pong with the same QoS, one
-//           ping per publish period (the cadence of the state)
+//           ping per publish period (the cadence of the state), sent half a period after
+//           each state sample: both series come from the same seconds
 // and prints p50/p99 of each, with the target: age p99 <= floor p99 + 150 us (the bridge
 // publishes each sample right after the loop cycle that made it: one DDS hop). The exit
 // status follows the RobotState target; odom and tf are reported against the same bound.
@@ -129,7 +130,7 @@ int run_server(const std::string& robot, double rate_hz) {
 
 constexpr double kAllowanceUs = 150.0;
 
-int run_client(const std::string& robot, double rate_hz, double seconds, int pings) {
+int run_client(const std::string& robot, double rate_hz, double seconds) {
   const pid_t child = fork();
   if (child == 0) {
     const std::string rate = std::to_string(rate_hz);
@@ -154,37 +155,86 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
     return code;
   };
 
-  // Age of the state at this client.
+  // Age and floor are measured in the same seconds: half a publish period after each state
+  // sample the client sends a ping, so a burst of load on the host lands in both series,
+  // not in one phase only. The pings fall between state samples and do not meet them.
+  const double match_deadline = swivel::monotonic_s() + 10.0;
+  while (!matched(ping) && swivel::monotonic_s() < match_deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   std::vector<double> ages_us;
+  std::vector<double> publish_us;  // snapshot stamp -> dds_write (the bridge's share)
+  std::vector<double> hop_us;      // dds_write -> client receive (the DDS hop)
   std::vector<double> odom_ages_us;
   std::vector<double> tf_ages_us;
+  std::vector<double> one_way_us;
   const dds_entity_t ws = dds_create_waitset(pp.handle());
   dds_waitset_attach(ws, dds_create_readcondition(state, DDS_ANY_STATE), 0);
   dds_waitset_attach(ws, dds_create_readcondition(odom, DDS_ANY_STATE), 1);
   dds_waitset_attach(ws, dds_create_readcondition(tf, DDS_ANY_STATE), 2);
+  dds_waitset_attach(ws, dds_create_readcondition(pong, DDS_ANY_STATE), 3);
   const std::string odom_frame = robot + "/odom";
+  std::string id = "bench";
+  swivel_msg_VelocityCommand msg{};
+  msg.robot_id = id.data();
+  constexpr int kWarmupPings = 20;
+  int pings_sent = 0;
+  double ping_at = 0.0;    // when the next ping goes out (0: none scheduled)
+  bool in_flight = false;  // a ping awaits its pong
+  const double half_period_s = 0.5 / rate_hz;
   const double deadline_first = swivel::monotonic_s() + 10.0;
   double end = 0.0;
+  void* samples[16] = {nullptr};
+  dds_sample_info_t infos[16];
   while (end == 0.0 || swivel::monotonic_s() < end) {
-    if (end == 0.0 && swivel::monotonic_s() > deadline_first) {
+    double now = swivel::monotonic_s();
+    if (end == 0.0 && now > deadline_first) {
       std::fprintf(stderr, "swivel-bench-dds: no state from the server within 10 s\n");
       return finish(1);
     }
-    if (dds_waitset_wait(ws, nullptr, 0, DDS_MSECS(100)) <= 0) continue;
-    void* samples[16] = {nullptr};
-    dds_sample_info_t infos[16];
+    if (in_flight && now - msg.stamp_s > 2.0) {
+      std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", pings_sent);
+      return finish(1);
+    }
+    if (ping_at > 0.0 && now >= ping_at && !in_flight) {
+      msg.sequence_number = static_cast<std::uint64_t>(++pings_sent);
+      msg.stamp_s = swivel::monotonic_s();
+      dds_write(ping, &msg);
+      in_flight = true;
+      ping_at = 0.0;
+    }
+    const double wait_s = ping_at > 0.0 ? std::max(0.0, ping_at - now) : 0.1;
+    if (dds_waitset_wait(ws, nullptr, 0, static_cast<dds_duration_t>(wait_s * 1e9)) <= 0) continue;
     const dds_return_t n = dds_take(state, samples, infos, 16, 16);
-    const double now = swivel::monotonic_s();
+    now = swivel::monotonic_s();
+    const auto real_now_ns = static_cast<double>(realtime_ns());
     for (dds_return_t i = 0; i < n; ++i) {
       const auto* s = static_cast<const swivel_msg_RobotState*>(samples[i]);
       if (!infos[i].valid_data || robot != s->robot_id) continue;
+      if (!in_flight && ping_at == 0.0) ping_at = now + half_period_s;
       if (end == 0.0) {
         end = now + seconds;  // the first sample starts the measurement window
         continue;
       }
       ages_us.push_back(1e6 * (now - s->stamp_s));
+      // The server stamps ROS time at the snapshot's instant, and DDS stamps the write
+      // (source_timestamp), both from CLOCK_REALTIME: the age splits into the bridge's share
+      // and the hop.
+      const double stamp_ns =
+          1e9 * static_cast<double>(s->ros_stamp_sec) + static_cast<double>(s->ros_stamp_nanosec);
+      const auto written_ns = static_cast<double>(infos[i].source_timestamp);
+      publish_us.push_back(1e-3 * (written_ns - stamp_ns));
+      hop_us.push_back(1e-3 * (real_now_ns - written_ns));
     }
     if (n > 0) dds_return_loan(state, samples, n);
+    const dds_return_t n_pong = dds_take(pong, samples, infos, 16, 16);
+    for (dds_return_t i = 0; i < n_pong; ++i) {
+      const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[i]);
+      if (!infos[i].valid_data || !in_flight || p->sequence_number != msg.sequence_number) continue;
+      in_flight = false;
+      if (pings_sent > kWarmupPings && end != 0.0) one_way_us.push_back(0.5e6 * (now - p->stamp_s));
+    }
+    if (n_pong > 0) dds_return_loan(pong, samples, n_pong);
     if (end == 0.0) continue;
     // ROS 2 stamps are ROS time: compare with this host's realtime clock.
     const dds_return_t n_odom = dds_take(odom, samples, infos, 16, 16);
@@ -206,54 +256,32 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
     if (n_tf > 0) dds_return_loan(tf, samples, n_tf);
   }
 
-  // Floor: ping-pong with the same QoS between the same two processes.
-  const double match_deadline = swivel::monotonic_s() + 10.0;
-  while (!matched(ping) && swivel::monotonic_s() < match_deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  // For reference: back-to-back pings, which find Cyclone's receive threads awake.
   const dds_entity_t pong_ws = dds_create_waitset(pp.handle());
   dds_waitset_attach(pong_ws, dds_create_readcondition(pong, DDS_ANY_STATE), 0);
-  std::string id = "bench";
-  swivel_msg_VelocityCommand msg{};
-  msg.robot_id = id.data();
-  std::uint64_t sequence = 0;
-  // One-way latencies of `count` pings (after 50 for warm-up), `gap_s` apart.
-  const auto ping_pong = [&](int count, double gap_s, std::vector<double>& one_way_us) {
-    for (int i = 0; i < count + 50; ++i) {
-      msg.sequence_number = ++sequence;
-      msg.stamp_s = swivel::monotonic_s();
-      dds_write(ping, &msg);
-      bool got = false;
-      while (!got) {
-        if (dds_waitset_wait(pong_ws, nullptr, 0, DDS_SECS(2)) <= 0) break;
-        void* samples[4] = {nullptr};
-        dds_sample_info_t infos[4];
-        const dds_return_t n = dds_take(pong, samples, infos, 4, 4);
-        const double now = swivel::monotonic_s();
-        for (dds_return_t k = 0; k < n; ++k) {
-          const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
-          if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {
-            got = true;
-            if (i >= 50) one_way_us.push_back(0.5e6 * (now - p->stamp_s));
-          }
-        }
-        if (n > 0) dds_return_loan(pong, samples, n);
-      }
-      if (!got) {
-        std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", i);
-        return false;
-      }
-      std::this_thread::sleep_for(std::chrono::duration<double>(gap_s));
-    }
-    return true;
-  };
-  // The floor at the state's own cadence: a sample every publish period finds the client and
-  // Cyclone's receive thread asleep, which back-to-back pings (0.5 ms apart, printed too)
-  // do not pay.
-  std::vector<double> one_way_us;
   std::vector<double> warm_us;
-  if (!ping_pong(pings, 1.0 / rate_hz, one_way_us) || !ping_pong(1000, 0.0005, warm_us)) {
-    return finish(1);
+  for (int i = 0; i < 1000; ++i) {
+    msg.sequence_number = static_cast<std::uint64_t>(++pings_sent);
+    msg.stamp_s = swivel::monotonic_s();
+    dds_write(ping, &msg);
+    bool got = false;
+    while (!got && dds_waitset_wait(pong_ws, nullptr, 0, DDS_SECS(2)) > 0) {
+      const dds_return_t n = dds_take(pong, samples, infos, 16, 16);
+      const double now = swivel::monotonic_s();
+      for (dds_return_t k = 0; k < n; ++k) {
+        const auto* p = static_cast<const swivel_msg_VelocityCommand*>(samples[k]);
+        if (infos[k].valid_data && p->sequence_number == msg.sequence_number) {
+          got = true;
+          warm_us.push_back(0.5e6 * (now - p->stamp_s));
+        }
+      }
+      if (n > 0) dds_return_loan(pong, samples, n);
+    }
+    if (!got) {
+      std::fprintf(stderr, "swivel-bench-dds: ping %d unanswered within 2 s\n", pings_sent);
+      return finish(1);
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
   }
 
   const double age_p50 = percentile(ages_us, 0.50);
@@ -268,9 +296,15 @@ int run_client(const std::string& robot, double rate_hz, double seconds, int pin
       "p50 %.1f us  p99 %.1f us  max %.1f us\n",
       ages_us.size(), rate_hz, age_p50, age_p99, percentile(ages_us, 1.0));
   std::printf(
-      "DDS floor, one-way (ping-pong RTT/2, %zu round trips at %.0f Hz, same QoS): "
+      "DDS floor, one-way (ping-pong RTT/2, %zu round trips at %.0f Hz between the samples, same "
+      "QoS): "
       "p50 %.1f us  p99 %.1f us\n",
       one_way_us.size(), rate_hz, floor_p50, floor_p99);
+  std::printf(
+      "  the age's parts: stamp -> dds_write p50 %.1f us  p99 %.1f us; "
+      "dds_write -> client p50 %.1f us  p99 %.1f us\n",
+      percentile(publish_us, 0.50), percentile(publish_us, 0.99), percentile(hop_us, 0.50),
+      percentile(hop_us, 0.99));
   std::printf("  (back-to-back, %zu round trips 0.5 ms apart: p50 %.1f us  p99 %.1f us)\n",
               warm_us.size(), percentile(warm_us, 0.50), percentile(warm_us, 0.99));
   std::printf(
@@ -309,16 +343,14 @@ int run(int argc, char** argv) {
   bool server = false;
   std::string robot = "bench_" + std::to_string(getpid());
   double rate_hz = 100.0;
-  double seconds = 5.0;
-  int pings = 500;
+  double seconds = 20.0;
   app.add_flag("--server", server, "run the publishing side (started by the benchmark)");
   app.add_option("--robot", robot, "robot id of the synthetic daemon");
   app.add_option("--rate-hz", rate_hz, "publish rate, Hz")->capture_default_str();
   app.add_option("--seconds", seconds, "state measurement window, s")->capture_default_str();
-  app.add_option("--pings", pings, "ping-pong round trips")->capture_default_str();
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench-dds")) return *exit;
   return server ? swivel::dds::run_server(robot, rate_hz)
-                : swivel::dds::run_client(robot, rate_hz, seconds, pings);
+                : swivel::dds::run_client(robot, rate_hz, seconds);
 }
 
 }  // namespace
