@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "swivel/calibration/calibration_io.hpp"
+#include "swivel/pose_math.hpp"
 #include "swivel/robot_model_io.hpp"
 #include "swivel/run_log.hpp"
 
@@ -20,7 +21,6 @@ namespace swivel::lab {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 struct CalibrateOptions {
   std::string model_file;
@@ -44,7 +44,7 @@ calibration::LockSpec parse_lock(const std::string& text) {
       const std::string deg = text.substr(colon + 1);
       const double a = std::stod(deg, &used);
       if (used != deg.size()) throw std::invalid_argument("");
-      lock.declared_steer_rad = a * kDeg;
+      lock.declared_steer_rad = a * kRadPerDeg;
     }
   } catch (const std::exception&) {
     throw std::invalid_argument("--lock '" + text + "': expected MODULE or MODULE:DEG, e.g. 2:165");
@@ -63,11 +63,15 @@ void print_results(const RobotModel& nominal, const calibration::CalibrationResu
   for (std::size_t i = 0; i < result.modules.size(); ++i) {
     const auto& p = result.modules[i].params;
     const auto& s = result.modules[i].sigma;
-    char x[32], y[32], delta[32], d[32], r[32];
+    char x[32];
+    char y[32];
+    char delta[32];
+    char d[32];
+    char r[32];
     std::snprintf(x, sizeof x, "%.3f +- %.3f", p.x_m * 1e3, s.x_m * 1e3);
     std::snprintf(y, sizeof y, "%.3f +- %.3f", p.y_m * 1e3, s.y_m * 1e3);
-    std::snprintf(delta, sizeof delta, "%.4f +- %.4f", p.steering_offset_rad / kDeg,
-                  s.steering_offset_rad / kDeg);
+    std::snprintf(delta, sizeof delta, "%.4f +- %.4f", p.steering_offset_rad / kRadPerDeg,
+                  s.steering_offset_rad / kRadPerDeg);
     std::snprintf(d, sizeof d, "%.4f +- %.4f", p.caster_offset_m * 1e3, s.caster_offset_m * 1e3);
     std::snprintf(r, sizeof r, "%.4f +- %.4f", p.wheel_radius_m * 1e3, s.wheel_radius_m * 1e3);
     std::printf("%-6zu %-22s %-22s %-20s %-20s %-20s\n", i + 1, x, y, delta, d, r);
@@ -113,7 +117,7 @@ int run_calibrate(const CalibrateOptions& o) {
   for (std::size_t j = 0; j < input.runs.size(); ++j) {
     std::printf("  %s: module %zu locked at %.3f deg, %zu motion-capture samples\n",
                 o.runs[j].c_str(), input.runs[j].locked_module + 1,
-                input.runs[j].locked_steer_meas_rad / kDeg, input.runs[j].data.t_s.size());
+                input.runs[j].locked_steer_meas_rad / kRadPerDeg, input.runs[j].data.t_s.size());
   }
   const calibration::CalibrationResult result =
       calibration::calibrate(input, calibration::calibration_options_for(nominal));

@@ -24,6 +24,7 @@
 
 #include "docent_experiment.hpp"
 #include "gnuplot.hpp"
+#include "swivel/pose_math.hpp"
 #include "swivel/robot_model_io.hpp"
 #include "swivel/shipped_config.hpp"
 #include "swivel/stats/summary.hpp"
@@ -34,7 +35,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kCmPerM = 100.0;
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::size_t kPaperMethods = 3;  // E/G, LCAKF, LCALSM
 constexpr std::size_t kPaperRuns = 5;
 
@@ -128,7 +128,9 @@ ScenarioSummary summarize(const DocentScenarioResult& sr) {
   }
   std::array<std::vector<double>, kDocentMethodCount> reductions;
   for (DocentMethod m : kMethods) {
-    std::vector<double> maxes, means, within;
+    std::vector<double> maxes;
+    std::vector<double> means;
+    std::vector<double> within;
     for (const DocentRunResult& r : sr.runs) {
       const DocentMethodStats& s = r.stats[idx(m)];
       maxes.push_back(s.max_error_m);
@@ -162,7 +164,8 @@ struct PaperDerived {
 PaperDerived paper_derived(std::size_t scenario) {
   PaperDerived d;
   for (std::size_t m = 0; m < kPaperMethods; ++m) {
-    std::vector<double> means, reductions;
+    std::vector<double> means;
+    std::vector<double> reductions;
     for (const auto& run : kPaperMeanCm[scenario]) {
       means.push_back(run[m]);
       reductions.push_back((run[0] - run[m]) / run[0]);
@@ -181,6 +184,8 @@ std::vector<std::string> assumptions(const RobotModel& nominal, const DocentExpe
   const DocentErrorModel& e = c.errors;
   const DocentDriveProfile& d = c.drive;
   const auto samples = static_cast<int>(std::lround(8.0 / c.sample_spacing_m));
+  // Each line is one sentence, its literals wrapped: no comma is missing.
+  // NOLINTBEGIN(bugprone-suspicious-missing-comma)
   return {
       "robot: " + nominal.name + " (nominal model " + nominal.source_file + "): wheel radii " +
           fixed(nominal.differential.wheel_radius_left_m, 3) + " m, track " +
@@ -220,9 +225,10 @@ std::vector<std::string> assumptions(const RobotModel& nominal, const DocentExpe
       "mode lcakf, default noise); LCALSM (lsm mode paper, k = 10, a point every 0.02 m, "
       "real-time output); extras marked *: LCALSM-HA* = lsm mode heading_aligned (variant), "
       "EKF* = kalman mode ekf (pose + gyro bias, no pose fixes)",
-      "the simulator has no position-dependent effects: S1 and S2 differ only by their "
-      "random draws",
+      "the simulator has no position-dependent effects: S1 and S2 differ only by their random "
+      "draws",
   };
+  // NOLINTEND(bugprone-suspicious-missing-comma)
 }
 
 // Our cells carry "value+-standard error" (entries over runs) or the value alone (one run).
@@ -629,6 +635,7 @@ int run_reproduce_docent(const DocentCommandOptions& o) {
 
   const std::vector<DocentScenarioResult> results = run_docent_experiment(nominal, config);
   std::vector<ScenarioSummary> summaries;
+  summaries.reserve(results.size());
   for (const DocentScenarioResult& sr : results) summaries.push_back(summarize(sr));
   const std::vector<std::string> lines = assumptions(nominal, config);
 

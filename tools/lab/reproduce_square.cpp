@@ -24,13 +24,13 @@
 #include "square_study.hpp"
 #include "square_summary.hpp"
 #include "swivel/calibration/monte_carlo.hpp"
+#include "swivel/pose_math.hpp"
 #include "swivel/robot_model_io.hpp"
 
 namespace swivel::lab {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kSideM = 2.5;
 
 // Table 5 of the paper, for the side-by-side print only.
@@ -166,7 +166,7 @@ int run_square_reproduction(const SquareOptions& o) {
   so.run.nonsystematic.wheel_slip_std = o.slip_std;
   so.run.nonsystematic.lateral_scrub_std = o.scrub_std;
   so.run.substep_s = o.substep_s;
-  so.calibration.procedure.rotation_rad = o.rotation_deg * kDeg;
+  so.calibration.procedure.rotation_rad = o.rotation_deg * kRadPerDeg;
   if (!o.calibrated_model.empty()) {
     RobotModel given = load_robot_model(o.calibrated_model);
     if (given.drivetrain != DrivetrainKind::kSwpc || given.modules.size() != truth.modules.size()) {
@@ -188,10 +188,11 @@ int run_square_reproduction(const SquareOptions& o) {
         "calibrated: %d simulated calibrations, the daemon's procedure (per module 2 runs of %.0f "
         "deg at %.1f rad/s, %s-driven free wheels), motion capture %.1f mm / %.2f deg at %.0f "
         "Hz, 4096-count encoders\n",
-        so.calibration_seeds, procedure.rotation_rad / kDeg, procedure.yaw_rate_radps,
+        so.calibration_seeds, procedure.rotation_rad / kRadPerDeg, procedure.yaw_rate_radps,
         procedure.wheel_drive == calibration::WheelDrive::kTorque ? "torque" : "velocity",
         truth.sensors.motion_capture.position_noise_m * 1e3,
-        truth.sensors.motion_capture.yaw_noise_rad / kDeg, truth.sensors.motion_capture.rate_hz);
+        truth.sensors.motion_capture.yaw_noise_rad / kRadPerDeg,
+        truth.sensors.motion_capture.rate_hz);
   }
   std::printf(
       "path: %.1f m square, %d lap(s), CW and CCW, %d run(s) each per model, 0.2 m/s, 90 deg "
@@ -225,7 +226,7 @@ int run_square_reproduction(const SquareOptions& o) {
                    {"wheel_slip_std", o.slip_std},
                    {"lateral_scrub_std", o.scrub_std},
                    {"substep_s", o.substep_s},
-                   {"calibration_rotation_deg", procedure.rotation_rad / kDeg},
+                   {"calibration_rotation_deg", procedure.rotation_rad / kRadPerDeg},
                    {"short", o.short_mode}};
   if (given) j["calibrated_model"] = o.calibrated_model;
   j["measured"] = {

@@ -8,20 +8,12 @@
 #include <string>
 
 #include "square_follower.hpp"
+#include "swivel/pose_math.hpp"
 #include "swivel/sim/effects.hpp"
 #include "swivel/sim/open_loop.hpp"
 #include "swivel/swpc/swpc_kinematics.hpp"
 
 namespace swivel::lab {
-namespace {
-
-Pose2 compose(const Pose2& a, const Pose2& b) {
-  const double c = std::cos(a.yaw_rad);
-  const double s = std::sin(a.yaw_rad);
-  return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m, a.yaw_rad + b.yaw_rad};
-}
-
-}  // namespace
 
 SquareRunResult run_square(const RobotModel& truth, const RobotModel& controller,
                            const SquareRunOptions& options) {

@@ -11,11 +11,10 @@
 #include <thread>
 
 #include "swivel/calibration/calibration_io.hpp"
+#include "swivel/pose_math.hpp"
 
 namespace swivel::lab {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Seed streams, so that no two draws share a seed.
 enum Stream : std::uint64_t {
@@ -51,7 +50,7 @@ TrackedModel track(const RobotModel& truth, const RobotModel& model,
       const SquareRunResult r = run_square(truth, model, ro);
       if (!r.finished) throw std::runtime_error("square run did not finish within its time limit");
       out.runs.push_back(
-          {ccw, j, ro.seed, r.position_error_m, r.heading_error_rad / kDeg, r.trace});
+          {ccw, j, ro.seed, r.position_error_m, r.heading_error_rad / kRadPerDeg, r.trace});
     }
   }
   return out;

@@ -6,11 +6,10 @@
 #include <stdexcept>
 
 #include "swivel/calibration/swpc_calibration.hpp"
+#include "swivel/pose_math.hpp"
 
 namespace swivel::lab {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 stats::Estimate mean_of(const std::vector<double>& values) {
   return stats::summarize(values).mean_estimate();
@@ -74,7 +73,8 @@ SquareSummary summarize_square(const SquareStudy& study, const RobotModel& truth
       ModuleAccuracy& a = s.accuracy[i];
       a.position_mm += (std::pow(e.x_m - t.x_m, 2) + std::pow(e.y_m - t.y_m, 2)) * 1e6 / k;
       a.steering_offset_deg +=
-          std::pow(calibration::wrap_pi(e.steering_offset_rad - t.steering_offset_rad) / kDeg, 2) /
+          std::pow(calibration::wrap_pi(e.steering_offset_rad - t.steering_offset_rad) / kRadPerDeg,
+                   2) /
           k;
       a.caster_offset_mm += std::pow((e.caster_offset_m - t.caster_offset_m) * 1e3, 2) / k;
       a.wheel_radius_mm += std::pow((e.wheel_radius_m - t.wheel_radius_m) * 1e3, 2) / k;

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Planar rigid-body helpers on Pose2 (types.hpp): composition, inverse, relative pose and
-// angle wrapping. Header-only, noexcept, allocation-free.
+// Planar rigid-body helpers on Pose2 (types.hpp): composition, inverse, relative pose,
+// angle wrapping and degree conversion. Header-only, noexcept, allocation-free.
 
 #include <cmath>
 #include <numbers>
@@ -9,6 +9,10 @@
 #include "swivel/types.hpp"
 
 namespace swivel {
+
+/// Radians in a degree, and degrees in a radian (for people-facing options and reports).
+inline constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+inline constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 /// The angle in (-pi, pi].
 inline double wrap_pi(double angle_rad) noexcept {
