@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <thread>
@@ -92,6 +93,7 @@ TEST(SwiveldDynamixel, DocentDrivesTheArcAndSigtermSwitchesTheTorqueOff) {
   EXPECT_NEAR(last.y_m, r * (1.0 - std::cos(last.yaw_rad)), 0.02) << last.line;
   EXPECT_LE(last.yaw_rad, 0.3 * last.t_s + 0.03) << last.line;
   EXPECT_GE(last.yaw_rad, 0.3 * (last.t_s - 0.5)) << last.line;
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
 }
 
 TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueOff) {
@@ -131,6 +133,7 @@ TEST(SwiveldDynamixel, SwpcFourModulesDriveTheSquareAndSigtermSwitchesTheTorqueO
   EXPECT_LT(last.x_m, 0.45) << last.line;
   EXPECT_GT(last.y_m, 0.05) << last.line;
   EXPECT_NEAR(last.yaw_rad, 0.0, 0.05) << last.line;
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
 }
 
 namespace {
@@ -172,6 +175,7 @@ void check_fault_stops_robot(const FaultCase& fault) {
   const auto writes = emulator.torque_writes();
   ASSERT_FALSE(writes.empty());
   EXPECT_EQ(emulator.torque_enable(1), 0);
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
 }
 
 }  // namespace
