@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <numbers>
 #include <system_error>
 
@@ -24,7 +25,7 @@ namespace dxl = swivel::dynamixel;
 
 constexpr double kRadPerCount = 2.0 * std::numbers::pi / dxl::kPositionCountsPerRev;
 constexpr double kRadpsPerUnit = dxl::kVelocityUnitRpm * 2.0 * std::numbers::pi / 60.0;
-constexpr double kSetupTimeout_s = 0.1;
+constexpr double kSetupTimeoutS = 0.1;
 
 // The hardware_error_text() meanings, in the order of hardware_messages_.
 constexpr std::array<const char*, DynamixelHardware::kHardwareTexts> kHardwareTextList = {
@@ -190,8 +191,8 @@ double DynamixelHardware::angle_at(std::int32_t servo, double age_s) const noexc
   if (servo < 0) return 0.0;
   const auto i = static_cast<std::size_t>(servo);
   const Servo& s = servos_[i];
-  const double rate_radps = s.direction * reading_.velocity[i] * kRadpsPerUnit / s.gear_ratio;
-  return output_angle(i, reading_.position[i]) + rate_radps * age_s;
+  const double rate_radps = s.direction * timed_.velocity[i] * kRadpsPerUnit / s.gear_ratio;
+  return output_angle(i, timed_.position[i]) + rate_radps * age_s;
 }
 
 double DynamixelHardware::output_angle(std::size_t i, std::int32_t counts) const noexcept {
@@ -207,13 +208,13 @@ bool DynamixelHardware::setup_servo(dxl::Bus& bus, std::size_t i) {
     activate_error_ = format("dynamixel ID %u (%s): %s", s.id, s.name, what);
     return false;
   };
-  dxl::BusResult r = bus.ping(s.id, kSetupTimeout_s, error);
+  dxl::BusResult r = bus.ping(s.id, kSetupTimeoutS, error);
   if (r != dxl::BusResult::kOk) {
     return fail(r == dxl::BusResult::kTimeout ? "does not answer a ping" : dxl::bus_result_text(r));
   }
   if ((error & dxl::kAlertBit) != 0) {
     std::uint8_t bits[1] = {};
-    if (bus.read(s.id, dxl::address::kHardwareErrorStatus, bits, kSetupTimeout_s, error) ==
+    if (bus.read(s.id, dxl::address::kHardwareErrorStatus, bits, kSetupTimeoutS, error) ==
             dxl::BusResult::kOk &&
         bits[0] != 0) {
       const std::string text = std::string("hardware error: ") + dxl::hardware_error_text(bits[0]) +
@@ -222,16 +223,16 @@ bool DynamixelHardware::setup_servo(dxl::Bus& bus, std::size_t i) {
     }
   }
   const std::uint8_t off[] = {0};
-  r = bus.write(s.id, dxl::address::kTorqueEnable, off, kSetupTimeout_s, error);
+  r = bus.write(s.id, dxl::address::kTorqueEnable, off, kSetupTimeoutS, error);
   if (r != dxl::BusResult::kOk || (error & 0x7F) != 0) return fail("cannot switch the torque off");
   const std::uint8_t mode[] = {s.steering ? dxl::operating_mode::kExtendedPosition
                                           : dxl::operating_mode::kVelocity};
-  r = bus.write(s.id, dxl::address::kOperatingMode, mode, kSetupTimeout_s, error);
+  r = bus.write(s.id, dxl::address::kOperatingMode, mode, kSetupTimeoutS, error);
   if (r != dxl::BusResult::kOk || (error & 0x7F) != 0) {
     return fail("cannot set the operating mode");
   }
   std::uint8_t present[4] = {};
-  r = bus.read(s.id, dxl::address::kPresentPosition, present, kSetupTimeout_s, error);
+  r = bus.read(s.id, dxl::address::kPresentPosition, present, kSetupTimeoutS, error);
   if (r != dxl::BusResult::kOk || (error & 0x7F) != 0) {
     return fail("cannot read the present position");
   }
@@ -279,7 +280,7 @@ Status DynamixelHardware::activate() {
     const std::uint8_t on[] = {1};
     std::uint8_t error = 0;
     const dxl::BusResult r =
-        bus.write(s.id, dxl::address::kTorqueEnable, on, kSetupTimeout_s, error);
+        bus.write(s.id, dxl::address::kTorqueEnable, on, kSetupTimeoutS, error);
     if (r != dxl::BusResult::kOk || (error & 0x7F) != 0) {
       activate_error_ =
           format("dynamixel ID %u (%s): %s", s.id, s.name, "refuses to switch the torque on");
@@ -298,6 +299,7 @@ Status DynamixelHardware::activate() {
   commands_.publish(zero);
   reading_.stamp_s = swivel::monotonic_s();
   reading_.sample_s = reading_.stamp_s;
+  timed_ = reading_;
   cycles_without_reading_ = 0;
   stop_.store(false, std::memory_order_release);
   thread_ = std::thread([this, initial = reading_] { bus_loop(initial); });
@@ -324,7 +326,7 @@ Status DynamixelHardware::deactivate() {
   for (const Servo& s : servos_) {
     std::uint8_t torque[1] = {1};
     std::uint8_t error = 0;
-    if (bus.read(s.id, dxl::address::kTorqueEnable, torque, kSetupTimeout_s, error) !=
+    if (bus.read(s.id, dxl::address::kTorqueEnable, torque, kSetupTimeoutS, error) !=
             dxl::BusResult::kOk ||
         torque[0] != 0) {
       if (status == Status::kOk) {
@@ -356,6 +358,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
   const double status_wire_s = static_cast<double>(19 * ids.size()) * 10.0 / baud_;
   double last_s = swivel::monotonic_s();
   double next_s = last_s;
+  double quickest_exchange_s = std::numeric_limits<double>::infinity();
   while (!stop_.load(std::memory_order_acquire)) {
     const double start_s = swivel::monotonic_s();
     const double dt = std::clamp(start_s - last_s, 0.0, 0.1);
@@ -426,6 +429,12 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     // arrives after all of them crossed the wire: the sample is that wire time before the
     // end (a late start, on a busy host or device, then does not skew it).
     r.sample_s = std::max(request_s, end_s - status_wire_s);
+    // A late end (the thread woke late for the replies, or the device answered late) moves
+    // the estimate away from the true instant by as much: such a reading has no known
+    // sampling time, and the loop keeps extrapolating the last one that had.
+    const double exchange_s = end_s - request_s;
+    if (ok) quickest_exchange_s = std::min(quickest_exchange_s, exchange_s);
+    r.sample_time_known = exchange_s <= quickest_exchange_s + kSampleTimingSlackS;
     r.cycle_busy_s = end_s - start_s;
     r.crc_errors = bus.crc_errors();
     readings_.publish(r);
@@ -451,10 +460,15 @@ Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
     last_error_ = message(reading_.fault, reading_.fault_servo, reading_.hardware_error);
     return Status::kError;
   }
+  // A reading without a known sampling time is used only once the last one with it is
+  // stale_timeout_s old: extrapolating that far would err more than its timing does.
+  if (reading_.sample_time_known || stamp_s - timed_.sample_s > stale_timeout_s_) {
+    timed_ = reading_;
+  }
   // The bus and the loop are not in step: extrapolate the servos' positions from when they
   // were sampled to the loop's stamp with their present velocities, so that the loop sees
   // steady motion rather than a reading that stands still one cycle and jumps the next.
-  const double age_s = std::clamp(stamp_s - reading_.sample_s, -stale_timeout_s_, stale_timeout_s_);
+  const double age_s = std::clamp(stamp_s - timed_.sample_s, -stale_timeout_s_, stale_timeout_s_);
   out.stamp_s = stamp_s;
   out.module_count = module_count_;
   for (std::uint32_t m = 0; m < module_count_; ++m) {

@@ -34,7 +34,7 @@ namespace swivel::plugins {
 
 class DynamixelHardware final : public Hardware {
  public:
-  static constexpr std::size_t kMaxServos = 2 * kMaxModules;
+  static constexpr std::size_t kMaxServos = std::size_t{2} * kMaxModules;
 
   enum class FaultKind : std::uint8_t {
     kNone,
@@ -57,11 +57,20 @@ class DynamixelHardware final : public Hardware {
     std::string name;              ///< "left wheel", "wheel 2", "steer 2"
   };
 
+  /// How much longer than the quickest exchange one may take with its sampling time still
+  /// known: at the 20 rad/s wheel limit, 2 ms of timing error moves a wheel 0.04 rad, a third
+  /// of the differential drivetrain's one-cycle jump bound at 500 Hz.
+  static constexpr double kSampleTimingSlackS = 0.002;
+
   /// What the bus thread publishes once per bus cycle.
   struct Reading {
     std::uint64_t cycle = 0;
     double stamp_s = 0.0;   ///< CLOCK_MONOTONIC at the end of the Sync Read
     double sample_s = 0.0;  ///< CLOCK_MONOTONIC the servos sampled (estimated)
+    /// The exchange took no longer than the quickest one plus kSampleTimingSlackS, so
+    /// sample_s is known to within that; a longer one (the host or device was busy in it)
+    /// leaves the sampling instant anywhere in it.
+    bool sample_time_known = true;
     std::array<std::int32_t, kMaxServos> position{};  ///< servo counts
     std::array<std::int32_t, kMaxServos> velocity{};  ///< 0.229 rpm units
     FaultKind fault = FaultKind::kNone;
@@ -71,7 +80,13 @@ class DynamixelHardware final : public Hardware {
     double cycle_busy_s = 0.0;     ///< Sync Write + Sync Read of this cycle
   };
 
+  DynamixelHardware() = default;
   ~DynamixelHardware() override;
+  // It owns a bus thread that points back at it.
+  DynamixelHardware(const DynamixelHardware&) = delete;
+  DynamixelHardware& operator=(const DynamixelHardware&) = delete;
+  DynamixelHardware(DynamixelHardware&&) = delete;
+  DynamixelHardware& operator=(DynamixelHardware&&) = delete;
 
   void configure(const PluginContext& ctx) override;
   Status activate() override;
@@ -133,7 +148,8 @@ class DynamixelHardware final : public Hardware {
   std::array<double, kMaxModules> start_steer_rad_{};  // steering at activation
 
   // Loop side.
-  Reading reading_{};
+  Reading reading_{};  ///< the newest reading: its faults count
+  Reading timed_{};    ///< the newest with a known sampling time: the angles come from it
   std::uint32_t cycles_without_reading_ = 0;
   std::uint32_t stale_cycles_ = 50;
   const char* last_error_ = "";
