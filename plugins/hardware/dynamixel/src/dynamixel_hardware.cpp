@@ -449,7 +449,8 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
 
 Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
   Reading fresh;
-  if (readings_.take(fresh)) {
+  const bool took = readings_.take(fresh);
+  if (took) {
     reading_ = fresh;
     cycles_without_reading_ = 0;
   } else if (++cycles_without_reading_ > stale_cycles_) {
@@ -460,9 +461,9 @@ Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
     last_error_ = message(reading_.fault, reading_.fault_servo, reading_.hardware_error);
     return Status::kError;
   }
-  // A reading without a known sampling time is used only once the last one with it is
+  // A new reading without a known sampling time is used only once the last one with it is
   // stale_timeout_s old: extrapolating that far would err more than its timing does.
-  if (reading_.sample_time_known || stamp_s - timed_.sample_s > stale_timeout_s_) {
+  if ((took && reading_.sample_time_known) || stamp_s - timed_.sample_s > stale_timeout_s_) {
     timed_ = reading_;
   }
   // The bus and the loop are not in step: extrapolate the servos' positions from when they
