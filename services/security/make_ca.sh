@@ -11,7 +11,7 @@ source "$here/common.sh"
 dir=$(profile_dir "${1:-}")
 days=${SWIVEL_CA_DAYS:-3650}
 mkdir -p "$dir/ca"
-chmod 700 "$dir/ca"
+chmod 700 "$dir/ca"  # private until apply_access below opens what the service reads
 
 make_ca() {
   local name=$1 subject=$2
@@ -29,3 +29,4 @@ make_ca() {
 
 make_ca identity_ca "/O=Swivel/CN=Swivel Identity CA"
 make_ca permissions_ca "/O=Swivel/CN=Swivel Permissions CA"
+apply_access "$dir"

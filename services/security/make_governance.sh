@@ -16,7 +16,7 @@ rtps=${SWIVEL_RTPS_PROTECTION:-SIGN}
   die "SWIVEL_RTPS_PROTECTION must be SIGN or ENCRYPT, not '$rtps'"
 
 xml="$dir/governance.xml"
-sed -e "s/@DOMAIN_MIN@/0/g" -e "s/@DOMAIN_MAX@/230/g" -e "s/@RTPS_PROTECTION@/$rtps/g" \
+sed -e "s/@DOMAIN_MIN@/$SWIVEL_DOMAIN_MIN/g" -e "s/@DOMAIN_MAX@/$SWIVEL_DOMAIN_MAX/g" -e "s/@RTPS_PROTECTION@/$rtps/g" \
   "$here/governance.xml.in" >"$xml.tmp"
 if cmp -s "$xml.tmp" "$xml" && signature_current "$dir" "$xml" "$dir/governance.p7s"; then
   rm -f "$xml.tmp"

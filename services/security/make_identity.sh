@@ -18,11 +18,12 @@ days=${SWIVEL_IDENTITY_DAYS:-365}
 
 out="$dir/identities/$name"
 mkdir -p "$out"
-chmod 700 "$out"
+chmod 700 "$out"  # private until apply_access opens the daemon's to the service group
 key="$out/key.pem" cert="$out/cert.pem"
 
 if [[ -f "$key" && -f "$cert" ]] &&
   openssl verify -CAfile "$dir/ca/identity_ca.pem" "$cert" >/dev/null 2>&1; then
+  apply_access "$dir"
   exit 0
 fi
 
@@ -37,4 +38,5 @@ printf '%s\n' "basicConstraints=critical,CA:FALSE" \
 openssl x509 -req -sha256 -in "$csr" -days "$days" -extfile "$ext" \
   -CA "$dir/ca/identity_ca.pem" -CAkey "$dir/ca/identity_ca_key.pem" -CAcreateserial \
   -CAserial "$dir/ca/identity_ca.srl" -out "$cert" 2>/dev/null
+apply_access "$dir"
 echo "created $cert"

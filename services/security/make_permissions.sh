@@ -4,8 +4,8 @@
 # Writes the permissions document of identity NAME for ROLE and signs it with the
 # permissions CA.
 # Usage: make_permissions.sh NAME ROLE [DIR]   (default ./swivel-security)
-#   ROLE daemon:   publishes state and diagnostics, subscribes to commands
-#   ROLE client:   subscribes to state and diagnostics, publishes commands
+#   ROLE daemon:   publishes state and diagnostics, subscribes to commands and sensor inputs
+#   ROLE client:   subscribes to state and diagnostics, publishes commands and sensor inputs
 #   ROLE observer: subscribes to state and diagnostics only
 # The grant is valid exactly as long as NAME's certificate, so that re-running the script
 # reproduces the same document and renewing the certificate renews the grant.
@@ -23,8 +23,8 @@ out="$dir/identities/$name"
 [[ -f "$out/cert.pem" ]] || die "missing $out/cert.pem: run make_identity.sh $name $dir first"
 
 case "$role" in
-  daemon) publish=$SWIVEL_STATE_TOPICS subscribe=$SWIVEL_COMMAND_TOPICS ;;
-  client) publish=$SWIVEL_COMMAND_TOPICS subscribe=$SWIVEL_STATE_TOPICS ;;
+  daemon) publish=$SWIVEL_STATE_TOPICS subscribe=$SWIVEL_INPUT_TOPICS ;;
+  client) publish=$SWIVEL_INPUT_TOPICS subscribe=$SWIVEL_STATE_TOPICS ;;
   observer) publish="" subscribe=$SWIVEL_STATE_TOPICS ;;
   *) die "role must be daemon, client or observer, not '$role'" ;;
 esac
@@ -71,8 +71,8 @@ xml="$out/permissions.xml"
       <allow_rule>
         <domains>
           <id_range>
-            <min>0</min>
-            <max>230</max>
+            <min>$SWIVEL_DOMAIN_MIN</min>
+            <max>$SWIVEL_DOMAIN_MAX</max>
           </id_range>
         </domains>
 XML
@@ -89,8 +89,10 @@ XML
 
 if cmp -s "$xml.tmp" "$xml" && signature_current "$dir" "$xml" "$out/permissions.p7s"; then
   rm -f "$xml.tmp"
+  apply_access "$dir"
   exit 0
 fi
 mv "$xml.tmp" "$xml"
 sign_document "$dir" "$xml" "$out/permissions.p7s"
+apply_access "$dir"
 echo "created $out/permissions.p7s ($role)"

@@ -33,3 +33,4 @@ sed -e "s|@NAME@|$name|g" -e "s|@PROFILE_DIR@|$dir|g" -e "s|@IDENTITY_DIR@|$out|
   -e "s|@AUTH_LIBRARY@|$(plugin auth)|g" -e "s|@AC_LIBRARY@|$(plugin ac)|g" \
   -e "s|@CRYPTO_LIBRARY@|$(plugin crypto)|g" "$here/secure.xml.in" >"$out/cyclonedds.xml.tmp"
 mv "$out/cyclonedds.xml.tmp" "$out/cyclonedds.xml"
+apply_access "$dir"

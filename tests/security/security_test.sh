@@ -13,12 +13,17 @@ source_dir=${SWIVEL_SOURCE_DIR:?}
 
 work=$(mktemp -d)
 robot_pid=""
+service_user=""  # a system user a case created, removed (with its group) at the end
 cleanup() {
   if [[ -n "$robot_pid" ]] && kill -0 "$robot_pid" 2>/dev/null; then
     kill -TERM "$robot_pid" 2>/dev/null || true
     wait "$robot_pid" 2>/dev/null || true
   fi
   rm -rf "$work"
+  if [[ -n "$service_user" ]]; then
+    userdel "$service_user" 2>/dev/null || true
+    groupdel "$service_user" 2>/dev/null || true
+  fi
 }
 trap cleanup EXIT
 
@@ -162,37 +167,141 @@ access() {
   echo "${grants:--}"
 }
 
-# Every topic the bridge declares is in exactly one family, with the grants of the role table.
-case_permissions_cover_every_bridge_topic() {
+# The topic names the daemon's code can create, read from the code itself: the bridge's
+# constants (topics.hpp), the ROS 2 names of options.cpp (relative ones both without and with
+# a namespace, absolute ones as they are), the sensors' default topics, and every sensor topic
+# a shipped configuration or the README names (motion capture has no default).
+code_topics() {
   local header="$source_dir/core/include/swivel/dds/topics.hpp"
+  local options="$source_dir/core/dds/src/options.cpp" name
+  sed -n 's/^inline constexpr const char\* k[A-Za-z]*Topic = "\(.*\)";$/\1/p' "$header"
+  {
+    sed -n 's/.*ros2_topic(ros_namespace, "\([a-z_/]*\)").*/\1/p' "$options"
+    sed -n 's/.*parse_sensor_topic([a-z]*, ros_namespace, "\([a-z_/]*\)".*/\1/p' "$options"
+    # topic: values in the shipped configurations (commented examples too) and the README.
+    sed -n 's/^[ #]*topic: *\([A-Za-z_/][A-Za-z0-9_/]*\).*/\1/p' "$source_dir"/config/*.yaml
+    grep -ho 'topic: /[A-Za-z0-9_/]*' "$source_dir/README.md" | sed 's/^topic: //'
+  } | sort -u | while read -r name; do
+    if [[ $name == /* ]]; then
+      echo "rt${name}"
+    else
+      echo "rt/$name"
+      echo "rt/robot1/$name"
+    fi
+  done
+  sed -n 's/.*return "\(rt\/[a-z_/]*\)";.*/\1/p' "$options"
+}
+
+# Every topic the daemon's code creates is in exactly one family, with the grants of the role
+# table; and the daemon itself, under the profile, starts on the DDS section of every shipped
+# configuration with the ROS 2 topics and both sensor inputs enabled.
+case_permissions_cover_every_bridge_topic() {
   local -a topics
-  if [[ -f "$header" ]]; then
-    mapfile -t topics < <(sed -n 's/^inline constexpr const char\* k[A-Za-z]*Topic = "\(.*\)";$/\1/p' "$header")
-    [[ ${#topics[@]} -gt 0 ]] || fail "no topic names found in $header"
-  fi
-  # The ROS 2 names, without and with a namespace (core/dds/src/options.cpp).
-  topics+=(rt/odom rt/robot1/odom rt/cmd_vel rt/robot1/cmd_vel rt/initialpose rt/robot1/initialpose
-           rt/tf rt/diagnostics rt/joint_states rt/robot1/joint_states)
-  local topic daemon_grants client_grants observer_grants
+  mapfile -t topics < <(code_topics | sort -u)
+  local topic
+  for topic in swivel_robot_state swivel_velocity_command rt/odom rt/robot1/cmd_vel rt/tf rt/imu \
+    rt/robot1/imu rt/vrpn_mocap/docent/pose; do
+    printf '%s\n' "${topics[@]}" | grep -qx "$topic" ||
+      fail "the topics read from the code lack $topic: the extraction is broken"
+  done
+  echo "ok: ${#topics[@]} topic names read from the code: ${topics[*]}"
+  local daemon_grants client_grants observer_grants
   for topic in "${topics[@]}"; do
     daemon_grants=$(access "$daemon" "$topic")
     client_grants=$(access "$client" "$topic")
     observer_grants=$(access "$observer" "$topic")
     case "$daemon_grants/$client_grants/$observer_grants" in
       w/r/r) echo "ok: $topic is state (daemon writes; client and observer read)" ;;
-      r/w/-) echo "ok: $topic is a command (client writes; daemon reads; observer nothing)" ;;
+      r/w/-) echo "ok: $topic is an input (client writes; daemon reads; observer nothing)" ;;
       *) fail "$topic: daemon '$daemon_grants', client '$client_grants', observer" \
-        "'$observer_grants' fits neither the state nor the command family" ;;
+        "'$observer_grants' fits neither the state nor the input family" ;;
     esac
   done
   # And the families are what the daemon's interface says they are.
   [[ $(access "$daemon" swivel_robot_state) == w ]] || fail "robot state is not state"
   [[ $(access "$daemon" swivel_velocity_command) == r ]] || fail "velocity is not a command"
   [[ $(access "$daemon" nonexistent_topic) == - ]] || fail "an unlisted topic is not denied"
+
+  # The domains: the governance and every grant cover exactly what swiveld accepts secured.
+  local range
+  range=0-$(sed -n 's/^inline constexpr std::uint32_t kMaxSecureDomainId = \([0-9]*\);$/\1/p' \
+    "$source_dir/core/include/swivel/dds/topics.hpp")
+  [[ $range != 0- ]] || fail "no kMaxSecureDomainId found in topics.hpp"
+  local doc
+  for doc in "$profile/governance.xml" "$profile"/identities/*/permissions.xml; do
+    [[ $(tr -d ' \n' <"$doc" | grep -o '<min>[0-9]*</min><max>[0-9]*</max>' |
+      sed 's/<min>\([0-9]*\)<\/min><max>\([0-9]*\)<\/max>/\1-\2/' | sort -u) == "$range" ]] ||
+      fail "$doc does not cover domains $range, what dds.domain_id may be with DDS Security"
+  done
+  echo "ok: the governance and every grant cover domains $range, what dds.domain_id may be with DDS Security"
+
+  # The real daemon on each shipped configuration's dds: section, grafted onto the simulated
+  # demo (the hardware does not change what DDS creates), on this case's domain.
+  local swiveld=${SWIVEL_SWIVELD:?} domain=${SWIVEL_TEST_DOMAIN:?} shipped ns run=0
+  local etc="$work/etc"
+  mkdir -p "$etc"
+  cp -r "$source_dir/config/robots" "$source_dir/config/dds" "$etc/"
+  for shipped in "$source_dir"/config/*.yaml; do
+    for ns in "" robot1; do
+      run=$((run + 1))
+      local yaml="$etc/run$run.yaml"
+      {
+        awk '/^dds:/ {exit} {print}' "$source_dir/config/swiveld.yaml" |
+          sed -e 's/^  realtime: true /  realtime: false /' -e 's/^  source: script /  source: none /'
+        awk '/^dds:/ {p = 1; print; next} /^[a-z]/ {p = 0} p' "$shipped" |
+          sed -E -e "s/^  domain_id: [0-9]+/  domain_id: $domain/" -e '/^  ros2:/,$d'
+        echo "  ros2:"
+        echo "    enabled: true"
+        [[ -z $ns ]] || echo "    namespace: $ns"
+        # The shipped sensor sections (the commented motion-capture example uncommented);
+        # a sensor the configuration has no section for gets its default or README topic.
+        awk '/^  ros2:/ {p = 1; next} /^  [a-z]/ {p = 0} p' \
+          <(awk '/^dds:/ {p = 1; next} /^[a-z]/ {p = 0} p' "$shipped") |
+          sed -E -e 's/^    # (mocap_pose:)/    \1/' -e 's/^    #   (topic|rate_hz):/      \1:/' |
+          awk '/^    (imu|mocap_pose):/ {p = 1; print; next} /^    [a-z#]/ {p = 0} p'
+      } >"$yaml"
+      grep -q '^    imu:' "$yaml" || printf '    imu:\n      topic: imu\n' >>"$yaml"
+      grep -q '^    mocap_pose:' "$yaml" ||
+        printf '    mocap_pose:\n      topic: /vrpn_mocap/docent/pose\n' >>"$yaml"
+      local what="swiveld on the dds: of $(basename "$shipped")${ns:+, namespace $ns}"
+      CYCLONEDDS_URI=$daemon "$swiveld" --config "$yaml" >"$work/robot.log" 2>&1 &
+      robot_pid=$!
+      local up=0
+      for _ in $(seq 200); do
+        grep -q 'motion capture from' "$work/robot.log" && { up=1; break; }
+        kill -0 "$robot_pid" 2>/dev/null || break
+        sleep 0.1
+      done
+      if [[ $up != 1 ]]; then
+        sed 's/^/    /' "$yaml" >&2
+        tail -n 20 "$work/robot.log" >&2
+        fail "$what did not start under the daemon's permissions"
+      fi
+      kill -TERM "$robot_pid"
+      wait "$robot_pid" || { tail -n 20 "$work/robot.log" >&2; fail "$what exited with an error"; }
+      robot_pid=""
+      echo "ok: $what starts under the profile: $(grep -o 'DDS: robot.*' "$work/robot.log" | cut -c1-60)...; $(grep -o 'gyro from [^ ]*' "$work/robot.log"); $(grep -o 'motion capture from [^ ]*' "$work/robot.log")"
+    done
+  done
+
+  # A domain the profile cannot cover is refused at the configuration check, with the reason;
+  # the same configuration without DDS Security passes.
+  sed -E 's/^  domain_id: [0-9]+/  domain_id: 231/' "$etc/run1.yaml" >"$etc/domain231.yaml"
+  local got=0
+  CYCLONEDDS_URI=$daemon "$swiveld" --config "$etc/domain231.yaml" --check >"$work/out" 2>&1 || got=$?
+  sed 's/^/    /' "$work/out" | tail -n 3
+  [[ $got != 0 ]] && grep -q 'dds.domain_id: expected a domain in \[0, 230\] with DDS Security' "$work/out" ||
+    fail "swiveld --check accepts domain 231 under the profile (exit $got)"
+  CYCLONEDDS_URI=$plain "$swiveld" --config "$etc/domain231.yaml" --check >"$work/out" 2>&1 ||
+    { cat "$work/out" >&2; fail "swiveld --check refuses domain 231 without DDS Security"; }
+  echo "ok: dds.domain_id 231 is refused with the profile, accepted without"
 }
 
 case_profile_scripts_are_idempotent() {
   local dir="$work/profile"
+  # No service group: everything private to its owner (the service's access is the
+  # installed_service case's).
+  export SWIVEL_SERVICE_GROUP=
   "$scripts/make_profile.sh" "$dir" >/dev/null
   (cd "$dir" && find . -type f -exec sha256sum {} + | sort) >"$work/before"
   "$scripts/make_profile.sh" "$dir" >"$work/second_run"
@@ -223,24 +332,81 @@ case_profile_scripts_are_idempotent() {
   echo "ok: bad roles and names are refused"
 }
 
-# The service as installed, with the documented drop-in (services/security/secure-dropin.conf):
-# the real swiveld, whose installed swiveld.yaml also names dds.config (loopback), must run
-# secured, so a participant without the profile's credentials neither reads nor commands it.
-case_installed_service_with_secure_dropin_refuses_strangers() {
+# The service as installed and as its unit runs it: a profile made by root with the documented
+# command, the unit's environment plus the documented drop-in, the installed swiveld.yaml, and
+# swiveld started as an unprivileged system user in the service group (the unit's User= and
+# Group=). The user and its group are created for the case and removed after it, so the
+# profile names them through SWIVEL_SERVICE_GROUP (default: swivel, the unit's). A participant
+# without the profile, an identity from another CA and an observer then get only what they
+# should: nothing, nothing, and the state without the right to command.
+case_installed_service_as_service_user_refuses_strangers() {
   local unit=${SWIVEL_INSTALLED_UNIT:?} installed=${SWIVEL_INSTALLED_CONFIG:?}
   local swiveld=${SWIVEL_SWIVELD:?} swivelctl=${SWIVEL_SWIVELCTL:?}
   local dropin="$scripts/secure-dropin.conf" domain=${SWIVEL_TEST_DOMAIN:?}
+  if [[ $(id -u) -ne 0 ]]; then
+    echo "skipped: needs root to create the service user and a root-made profile"
+    exit 77
+  fi
   # The service's environment as systemd builds it: the unit's Environment= lines, then the
   # drop-in's; the last assignment of a variable wins.
   local uri
   uri=$(sed -n 's/^Environment=CYCLONEDDS_URI=//p' "$unit" "$dropin" | tail -n 1)
   [[ $uri == file:///etc/swivel/security/identities/swiveld/cyclonedds.xml ]] ||
     fail "unit + drop-in give CYCLONEDDS_URI='$uri', not the profile's daemon configuration"
-  uri=${uri//\/etc\/swivel\/security/$profile}  # the test's profile stands in for /etc's
+  local user group
+  user=$(sed -n 's/^User=//p' "$unit") group=$(sed -n 's/^Group=//p' "$unit")
+  [[ $user == swivel && $group == swivel ]] || fail "the unit runs as $user:$group, not swivel:swivel"
+
+  # The service user: a system user with its own group, like swivel.sysusers.conf's.
+  service_user="swivel-test-$$"
+  useradd --system --user-group --no-create-home --home-dir /nonexistent \
+    --shell /usr/sbin/nologin "$service_user" || fail "cannot create the user $service_user"
+  local uid gid
+  uid=$(id -u "$service_user") gid=$(getent group "$service_user" | cut -d: -f3)
+  as_service() {
+    setpriv --reuid="$uid" --regid="$gid" --init-groups --no-new-privs -- "$@"
+  }
+  [[ $(as_service id -u) == "$uid" ]] || fail "setpriv did not drop to $service_user"
+
+  # The profile as the README makes it, by root, in the installed layout's place.
+  chmod 755 "$work"
+  local etc="$work/etc/swivel" security="$work/etc/swivel/security"
+  mkdir -p "$etc"
+  export SWIVEL_SERVICE_GROUP=$service_user  # for every profile script below
+  "$scripts/make_profile.sh" "$security" >/dev/null
+  # Re-running is documented as safe: it must keep the access the service needs.
+  "$scripts/make_profile.sh" "$security" >/dev/null
+  local f want got
+  for f in ca:750 ca/identity_ca.pem:640 ca/permissions_ca.pem:640 identities/swiveld:750 \
+    identities/swiveld/key.pem:640 identities/swiveld/cyclonedds.xml:640; do
+    want="${f#*:} root:$service_user"
+    got=$(stat -c '%a %U:%G' "$security/${f%%:*}")
+    [[ $got == "$want" ]] || fail "${f%%:*} is $got after a re-run, expected $want"
+  done
+  for f in ca/identity_ca_key.pem ca/permissions_ca_key.pem identities/swivelctl/key.pem; do
+    [[ $(stat -c '%a %U' "$security/$f") == "600 root" ]] || fail "$f is not private to root"
+    ! as_service test -r "$security/$f" || fail "the service user can read $f"
+  done
+  echo "ok: the profile made by root gives $service_user the daemon's files and nothing else"
+  # An observer, added as the README documents.
+  "$scripts/make_identity.sh" swivelobs "$security" >/dev/null
+  "$scripts/make_permissions.sh" swivelobs observer "$security" >/dev/null
+  "$scripts/render_config.sh" swivelobs "$security" >/dev/null
+  local client_uri="file://$security/identities/swivelctl/cyclonedds.xml"
+  local observer_uri="file://$security/identities/swivelobs/cyclonedds.xml"
+  # An intruder: the client's name from another identity CA, with this profile's public
+  # documents (governance, the client's signed permissions).
+  local rogue_dir="$work/rogue"
+  "$scripts/make_ca.sh" "$rogue_dir" >/dev/null
+  "$scripts/make_identity.sh" swivelctl "$rogue_dir" >/dev/null
+  cp "$security/ca/permissions_ca.pem" "$rogue_dir/ca/"
+  cp "$security/governance.p7s" "$rogue_dir/"
+  cp "$security/identities/swivelctl/permissions.p7s" "$rogue_dir/identities/swivelctl/"
+  "$scripts/render_config.sh" swivelctl "$rogue_dir" >/dev/null
+  local rogue_uri="file://$rogue_dir/identities/swivelctl/cyclonedds.xml"
+  uri=${uri//\/etc\/swivel\/security/$security}  # the case's profile stands in for /etc's
 
   # The installed layout: swiveld.yaml with robots/ and dds/ beside it, on this case's domain.
-  local etc="$work/etc/swivel"
-  mkdir -p "$etc"
   cp -r "$source_dir/config/robots" "$source_dir/config/dds" "$etc/"
   sed -e "s/^  domain_id: 0 /  domain_id: $domain /" -e 's/^  realtime: true /  realtime: false /' \
     "$installed" >"$etc/swiveld.yaml"
@@ -250,7 +416,11 @@ case_installed_service_with_secure_dropin_refuses_strangers() {
     fail "the installed configuration no longer names dds.config: this case tests that conflict"
   grep -q "^  domain_id: $domain " "$etc/swiveld.yaml" || fail "could not move to domain $domain"
 
-  CYCLONEDDS_URI=$uri "$swiveld" --config "$etc/swiveld.yaml" >"$work/robot.log" 2>&1 &
+  # setpriv and env exec: the background job's pid is swiveld's.
+  setpriv --reuid="$uid" --regid="$gid" --init-groups --no-new-privs -- \
+    env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin "CYCLONEDDS_URI=$uri" \
+    "SWIVEL_PLUGIN_PATH=${SWIVEL_PLUGIN_PATH:-}" \
+    "$swiveld" --config "$etc/swiveld.yaml" >"$work/robot.log" 2>&1 &
   robot_pid=$!
   local up=0
   for _ in $(seq 200); do
@@ -258,10 +428,16 @@ case_installed_service_with_secure_dropin_refuses_strangers() {
     kill -0 "$robot_pid" 2>/dev/null || break
     sleep 0.1
   done
-  [[ $up == 1 ]] || { cat "$work/robot.log" >&2; fail "swiveld did not start"; }
+  [[ $up == 1 ]] || { cat "$work/robot.log" >&2; fail "swiveld did not start as $service_user"; }
   grep 'DDS: robot' "$work/robot.log"
+  [[ $(readlink "/proc/$robot_pid/exe") == "$(readlink -f "$swiveld")" ]] ||
+    fail "pid $robot_pid is not swiveld"
+  [[ $(awk '/^Uid:/ {print $2 $3 $4 $5}' "/proc/$robot_pid/status") == "$uid$uid$uid$uid" &&
+     $(awk '/^Gid:/ {print $2}' "/proc/$robot_pid/status") == "$gid" ]] ||
+    fail "swiveld does not run as $service_user ($(grep -E '^(Uid|Gid):' "/proc/$robot_pid/status" | xargs))"
   grep -q "CYCLONEDDS_URI=$uri (environment; it overrides dds.config file://$etc/dds/loopback.xml)" \
     "$work/robot.log" || fail "swiveld's log does not say that the environment overrides dds.config"
+  echo "ok: swiveld runs as $service_user (uid $uid) with the profile's daemon configuration"
 
   # ctl URI EXPECTED WHAT ARGS...: swivelctl on this domain with configuration URI.
   ctl() {
@@ -276,15 +452,20 @@ case_installed_service_with_secure_dropin_refuses_strangers() {
     fi
     echo "ok: $what"
   }
-  ctl "$client" 0 "trusted client reads the pose" echo state --json --count 1 --timeout 15
+  ctl "$client_uri" 0 "trusted client reads the pose" echo state --json --count 1 --timeout 15
   local before
   before=$(grep -o '"x_m":[^,]*' "$work/out" | head -n 1)
   ctl "$plain" 1 "participant without security reads nothing" echo state --count 1 --timeout 3
-  ctl "$rogue" 1 "identity from another CA reads nothing" echo state --count 1 --timeout 3
-  # Commands from a stranger reach no reader: the robot stays where it is.
+  ctl "$rogue_uri" 1 "identity from another CA reads nothing" echo state --count 1 --timeout 3
+  ctl "$observer_uri" 0 "observer reads the pose" echo state --json --count 1 --timeout 15
+  ctl "$observer_uri" 1 "observer may not command" drive 0.5 0 0 --for 1.5
+  grep -q 'Not Allowed By Security' "$work/err" || fail "the observer's refusal does not name security"
+  # Commands from strangers reach no reader: the robot stays where it is.
   CYCLONEDDS_URI=$plain "$swivelctl" drive 0.5 0 0 --for 1.5 --domain "$domain" \
     >"$work/out" 2>&1 || true
-  ctl "$client" 0 "trusted client reads the pose again" echo state --json --count 1 --timeout 15
+  CYCLONEDDS_URI=$rogue_uri "$swivelctl" drive 0.5 0 0 --for 1.5 --domain "$domain" \
+    >"$work/out" 2>&1 || true
+  ctl "$client_uri" 0 "trusted client reads the pose again" echo state --json --count 1 --timeout 15
   local after
   after=$(grep -o '"x_m":[^,]*' "$work/out" | head -n 1)
   [[ -n $before && $before == "$after" ]] ||

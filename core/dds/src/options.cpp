@@ -6,6 +6,7 @@
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
+#include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
 
@@ -112,6 +113,14 @@ DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
       reader.fail("config", "no such Cyclone DDS configuration file '" + path.string() + "'");
     }
     options.config_uri = "file://" + std::filesystem::absolute(path).lexically_normal().string();
+  }
+  // A DDS Security profile covers domains 0..230 only (the governance's id_range).
+  if (options.domain_id > kMaxSecureDomainId && uses_dds_security(options.config_uri)) {
+    reader.fail("domain_id", "expected a domain in [0, " + std::to_string(kMaxSecureDomainId) +
+                                 "] with DDS Security (" +
+                                 resolve_config(options.config_uri).description +
+                                 " enables it; a profile's governance covers no more), got " +
+                                 std::to_string(options.domain_id));
   }
   options.publish_rate_hz = reader.number_or("publish_rate_hz", 100.0, 1.0, 1000.0);
   options.diagnostics_rate_hz = reader.number_or("diagnostics_rate_hz", 2.0, 0.1, 100.0);

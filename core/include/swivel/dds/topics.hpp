@@ -98,6 +98,14 @@ struct ResolvedConfig {
 /// <sysconfdir>/swivel/dds/loopback.xml otherwise), never Cyclone's defaults.
 ResolvedConfig resolve_config(const std::string& file_uri = "");
 
+/// The last DDS domain a DDS Security governance or permissions document can name (OMG DDS
+/// Security's DomainId: 0..230); plain DDS goes to 232.
+inline constexpr std::uint32_t kMaxSecureDomainId = 230;
+
+/// True when the Cyclone configuration in effect (CYCLONEDDS_URI when it is a single
+/// file:// URI, else `config_uri`) enables DDS Security (has a <Security> element).
+bool uses_dds_security(const std::string& config_uri);
+
 /// resolve_config("").uri: what a command-line tool uses.
 std::string tool_config_uri();
 
