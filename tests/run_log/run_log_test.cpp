@@ -302,5 +302,35 @@ TEST(RunLog, WriterRejectsImpossibleHeaders) {
   EXPECT_THROW(RunLogWriter("/nonexistent-dir/run.csv", swpc_header(4)), RunLogError);
 }
 
+TEST(RunLog, GyroTimingDeclarationIsReadAndWrittenBack) {
+  // Default: the reading at t, and nothing written.
+  std::istringstream plain(std::string(kDifferentialHead) + "0,0,0,0,0,0,0,,,\n");
+  EXPECT_FALSE(parse_run_log(plain, "run.csv").header.gyro_mean_over_row);
+  const std::string declared =
+      "# swivel-run 1\n# robot: docent\n# drivetrain: differential\n"
+      "#gyro_wz:  mean over the row\n"
+      "t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw\n"
+      "0,0,0,0,0,0,0.5,,,\n";
+  std::istringstream in(declared);
+  const RunLog log = parse_run_log(in, "run.csv");
+  EXPECT_TRUE(log.header.gyro_mean_over_row);
+  EXPECT_TRUE(log.header.comments.empty()) << "a declaration, not an annotation";
+  std::ostringstream out;
+  {
+    RunLogWriter writer(out, log.header);
+    writer.write(log.samples[0]);
+  }
+  EXPECT_NE(out.str().find("\n# gyro_wz: mean over the row\n"), std::string::npos) << out.str();
+  std::istringstream again(out.str());
+  EXPECT_TRUE(parse_run_log(again, "copy.csv").header.gyro_mean_over_row);
+  std::istringstream stated(
+      "# swivel-run 1\n# drivetrain: differential\n# gyro_wz: reading at t\n"
+      "t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw\n");
+  EXPECT_FALSE(parse_run_log(stated, "run.csv").header.gyro_mean_over_row);
+  EXPECT_EQ(expect_error("# swivel-run 1\n# drivetrain: differential\n# gyro_wz: filtered\n"),
+            "run.csv:3: expected '# gyro_wz: mean over the row' or '# gyro_wz: reading at t', "
+            "got '# gyro_wz: filtered'");
+}
+
 }  // namespace
 }  // namespace swivel

@@ -28,6 +28,27 @@
 // offset of up to a row for the whole run, and counts what the unknown instant of each change
 // within its row leaves as noise.
 //
+// What each column means in time. Every column is a sample at its row's time t (s, from the
+// log's start), never a value over the row:
+//   t                  the instant the row's readings belong to
+//   cmd_vx/vy/wz       the command in force at t (see above)
+//   wheel_*, steer_*   the encoder angles at t (cumulative wheel angles; wheel increments are
+//                      differences of instants, so they are exact over the row)
+//   gyro_wz            the rate reading at t. A reader that integrates it says how: the
+//                      model-gap sensor replay takes the trapezoid (g[k-1] + g[k]) / 2 over
+//                      (t[k-1], t[k]]. A source whose gyro reports the mean rate since its
+//                      previous row (an integrating sensor read once a row, as `swivel-lab
+//                      simulate` reads the simulator's) declares it with the header line
+//                      `# gyro_wz: mean over the row` (RunLogHeader::gyro_mean_over_row), and
+//                      gyro[k] is then the mean over (t[k-1], t[k]].
+//   truth_*            the motion-capture pose at t
+//   est_*, fault       the daemon's estimate and active fault at t
+// `swivelctl record` and `swiveld --record` write the daemon's latest control cycle at each
+// row: with the loop (1 kHz by default) much faster than the record rate, the gyro column is
+// the reading at t (the simulated gyro's mean over one loop cycle, 1 ms). Recording the
+// simulator at the loop rate itself would make that cycle the row; neither writer declares
+// it, so record below the loop rate (the defaults: 1 kHz loop, 100 Hz rows).
+//
 // Neither the writer nor the reader is real-time safe (they allocate and do I/O); the
 // daemon hands RunLogSample values (trivially copyable) to a writer thread.
 
@@ -66,6 +87,9 @@ struct RunLogHeader {
   std::vector<std::string> comments;
   /// The rows carry est_x, est_y, est_yaw and fault after the truth columns.
   bool estimate_columns = false;
+  /// gyro_wz is the mean rate over (t[k-1], t[k]] rather than the reading at t: the header
+  /// line `# gyro_wz: mean over the row` (`# gyro_wz: reading at t` states the default).
+  bool gyro_mean_over_row = false;
 };
 
 /// One row. For a differential robot wheel_rad[0] is the left and wheel_rad[1] the right

@@ -20,6 +20,10 @@ constexpr std::string_view kVersionKey = "swivel-run";
 constexpr std::string_view kRobotKey = "robot:";
 constexpr std::string_view kDrivetrainKey = "drivetrain:";
 constexpr std::string_view kModulesKey = "modules:";
+// What gyro_wz means in time (RunLogHeader::gyro_mean_over_row) and its two values.
+constexpr std::string_view kGyroTimingKey = "gyro_wz:";
+constexpr std::string_view kGyroMean = "mean over the row";
+constexpr std::string_view kGyroReading = "reading at t";
 // The optional trailing columns (RunLogHeader::estimate_columns).
 constexpr std::array<const char*, 4> kEstimateColumns = {"est_x", "est_y", "est_yaw", "fault"};
 
@@ -162,6 +166,13 @@ class Parser {
         }
         header.module_count = n;
         have_modules = true;
+      } else if (starts_with(text, kGyroTimingKey)) {
+        const std::string_view value = trim(text.substr(kGyroTimingKey.size()));
+        if (value != kGyroMean && value != kGyroReading) {
+          fail("expected '# gyro_wz: " + std::string(kGyroMean) + "' or '# gyro_wz: " +
+               std::string(kGyroReading) + "', got '" + std::string(line) + "'");
+        }
+        header.gyro_mean_over_row = value == kGyroMean;
       } else if (have_version) {
         // Any other comment is an annotation: kept, never interpreted.
         header.comments.emplace_back(text);
@@ -340,6 +351,7 @@ void RunLogWriter::start() {
   const bool swpc = header_.drivetrain == DrivetrainKind::kSwpc;
   *out_ << "# drivetrain: " << (swpc ? "swpc" : "differential") << '\n';
   if (swpc) *out_ << "# modules: " << header_.module_count << '\n';
+  if (header_.gyro_mean_over_row) *out_ << "# " << kGyroTimingKey << ' ' << kGyroMean << '\n';
   for (const std::string& comment : header_.comments) *out_ << "# " << comment << '\n';
   *out_ << join(run_log_columns(header_)) << '\n';
   if (!*out_) throw RunLogError(path_ + ": write failed");

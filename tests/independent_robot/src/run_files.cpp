@@ -31,6 +31,8 @@ std::string run_log_csv(const RunSpec& spec, const RunRecord& record) {
   out += "# swivel-run 1\n";
   out += "# robot: " + robot_name(spec.robot) + "\n";
   out += swpc ? "# drivetrain: swpc\n# modules: 4\n" : "# drivetrain: differential\n";
+  // Its gyro reports the mean rate since the previous row (simulation.cpp).
+  out += "# gyro_wz: mean over the row\n";
   out += "# source: swivel-independent-run (independent robot generator), seed " +
          std::to_string(spec.seed) + "\n";
   out += "t,cmd_vx,cmd_vy,cmd_wz";

@@ -58,6 +58,7 @@ TEST_P(RunLogFormat, ParsesWithTheProjectsReaderAndCarriesEveryColumnAtItsRowsTi
   EXPECT_EQ(log.header.drivetrain,
             swpc ? swivel::DrivetrainKind::kSwpc : swivel::DrivetrainKind::kDifferential);
   EXPECT_EQ(log.header.module_count, swpc ? 4U : 2U);
+  EXPECT_TRUE(log.header.gyro_mean_over_row) << "its gyro reports the mean since the last row";
 
   // 100 Hz rows, strictly increasing, jittered by about 0.3 ms and never more than 1 ms.
   ASSERT_EQ(log.samples.size(), 12000U);

@@ -16,6 +16,7 @@ RunData to_run_data(const RunLog& log) {
   d.source = log.source;
   d.drivetrain = log.header.drivetrain;
   d.module_count = log.header.module_count;
+  d.gyro_mean_over_row = log.header.gyro_mean_over_row;
   const std::size_t n = log.samples.size();
   d.t_s.reserve(n);
   d.cmd_vx_mps.reserve(n);

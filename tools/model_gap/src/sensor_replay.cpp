@@ -147,8 +147,14 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row)
       if (!fit.ok) return false;
       delta = swpc::integrate_twist(fit.twist, dt);
     }
-    // gyro[k] is the mean rate over (t[k-1], t[k]].
-    if (!eg.step(delta, dt, run.gyro_radps[k], true)) return false;
+    // The gyro's mean rate over (t[k-1], t[k]]: the logged value where the log declares row
+    // means, else the trapezoid of the readings at the row's ends (swivel/run_log.hpp). At a
+    // step of the rate within the row its error is at most half the step times dt, either
+    // way; the reading at t[k] taken as the mean would turn every step early, all one way.
+    const double gyro_mean = run.gyro_mean_over_row
+                                 ? run.gyro_radps[k]
+                                 : 0.5 * (run.gyro_radps[k - 1] + run.gyro_radps[k]);
+    if (!eg.step(delta, dt, gyro_mean, true)) return false;
     const Pose2 p = eg.pose();
     track_[k] = Pose2{p.x_m, p.y_m, eg.unwrapped_yaw_rad()};
     encoder_yaw_[k] = encoder_yaw_[k - 1] + delta.yaw_rad;

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "swivel/motion/twist_limiter.hpp"
 #include "swivel/robot_model_io.hpp"
 #include "swivel/sim/open_loop.hpp"
 #include "swivel/sim/world.hpp"
@@ -85,6 +86,7 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
   RunLog log;
   log.source = "simulated";
   log.header = run_log_header(nominal);
+  log.header.gyro_mean_over_row = true;  // one read a row: the world's mean since the last
   const auto rows = static_cast<std::size_t>(std::llround(duration_s * rate_hz)) + 1;
   const double dt = 1.0 / rate_hz;
   // The robot's controller runs at 1 kHz on the continuously changing command, as a real
@@ -111,6 +113,60 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
       controller.velocity(pattern_command(t + s * h, swpc), measured, command);
       if (world.step(h, command) != Status::kOk) throw std::runtime_error(world.last_error());
     }
+  }
+  return log;
+}
+
+RunLog record_like_swiveld(const RobotModel& nominal, const RobotModel& truth,
+                           const std::vector<ScriptStep>& script, double duration_s,
+                           std::uint64_t seed, double script_phase_s, double rate_hz) {
+  constexpr double kCycleS = 0.001;
+  double period_s = 0.0;
+  for (const ScriptStep& step : script) period_s += step.duration_s;
+  if (script.empty() || !(period_s > 0.0)) throw std::invalid_argument("empty script");
+  const auto script_at = [&](double t) {
+    double u = std::fmod(t + script_phase_s, period_s);
+    for (const ScriptStep& step : script) {
+      if (u < step.duration_s) return step.twist;
+      u -= step.duration_s;
+    }
+    return script.back().twist;
+  };
+  sim::SimOptions options;
+  options.seed = seed;
+  sim::World world(truth, options);
+  const sim::OpenLoopController controller(nominal);
+  motion::TwistLimiter limiter(nominal.limits);
+  RunLog log;
+  log.source = "recorded like swiveld";
+  log.header = run_log_header(nominal);
+  const auto cycles_per_row = static_cast<std::int64_t>(std::llround(1.0 / (rate_hz * kCycleS)));
+  const auto cycles = static_cast<std::int64_t>(std::llround(duration_s / kCycleS));
+  HardwareState hw;
+  ActuatorCommand command;
+  bool have_truth = false;
+  Pose2 truth_pose;
+  for (std::int64_t c = 0; c <= cycles; ++c) {
+    const double t = static_cast<double>(c) * kCycleS;
+    world.read(hw);
+    // A motion-capture sample is reported by one read only: a row keeps the latest since the
+    // row before, as the daemon's state does.
+    if (hw.motion_capture.valid) {
+      have_truth = true;
+      truth_pose = hw.motion_capture.pose;
+    }
+    const Twist2 twist = script_at(t);
+    if (c % cycles_per_row == 0) {
+      hw.stamp_s = t;
+      RunLogSample row = sim::make_run_log_sample(hw, twist);
+      row.has_truth = have_truth;
+      row.truth = truth_pose;
+      have_truth = false;
+      log.samples.push_back(row);
+    }
+    if (c == cycles) break;
+    controller.velocity(limiter.step(twist, kCycleS), hw, command);
+    if (world.step(kCycleS, command) != Status::kOk) throw std::runtime_error(world.last_error());
   }
   return log;
 }

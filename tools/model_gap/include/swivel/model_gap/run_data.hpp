@@ -15,6 +15,9 @@ struct RunData {
   std::string source;  ///< file it came from, for messages
   DrivetrainKind drivetrain = DrivetrainKind::kDifferential;
   std::size_t module_count = 2;  ///< 2 (left, right) for a differential robot
+  /// gyro_radps[k] is the mean rate over (t[k-1], t[k]] (the log's `# gyro_wz: mean over the
+  /// row`); false: the reading at t[k] (swivel/run_log.hpp).
+  bool gyro_mean_over_row = false;
   std::vector<double> t_s;
   std::vector<double> cmd_vx_mps;
   std::vector<double> cmd_vy_mps;

@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: Apache-2.0
+// The gyro column's meaning in time (swivel/run_log.hpp): swiveld records the reading at each
+// row's time, `swivel-lab simulate` the mean over the row (declared). The sensor replay
+// integrates each as what it is, so a log recorded the daemon's way gives the same answer as
+// one written the simulator's way.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "gap_fixtures.hpp"
+#include "swivel/model_gap/run_log_adapter.hpp"
+#include "swivel/model_gap/sensor_replay.hpp"
+#include "swivel/sim/effects.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+constexpr double kGyroBiasRadps = 0.004;
+constexpr double kLeftScale = 0.998;
+constexpr double kRightScale = 1.002;
+
+// swiveld_record_test's figure: at rest, then turns both ways at several speeds, every change
+// a step (the docent's nominal model has no `limits:`).
+std::vector<testing::ScriptStep> figure() {
+  return {{{0.0, 0.0, 0.0}, 5.0},   {{0.3, 0.0, 0.0}, 2.0}, {{0.3, 0.0, 0.6}, 2.0},
+          {{0.15, 0.0, -0.5}, 2.5}, {{0.4, 0.0, 0.2}, 2.0}, {{0.0, 0.0, 0.8}, 1.5},
+          {{0.25, 0.0, -0.3}, 2.0}};
+}
+
+RobotModel hidden_truth(const RobotModel& nominal) {
+  RobotModel truth = nominal;
+  truth.effects["gyro_bias"]["bias_rad_s"] = kGyroBiasRadps;
+  truth.effects["wheel_radius"]["left_scale"] = kLeftScale;
+  truth.effects["wheel_radius"]["right_scale"] = kRightScale;
+  return truth;
+}
+
+TEST(GyroTiming, TheRecorderWritesTheReadingAtEachRowUndeclared) {
+  const RobotModel nominal = testing::robot("docent");
+  const RunLog log = testing::record_like_swiveld(nominal, nominal, figure(), 8.0, 3);
+  EXPECT_FALSE(log.header.gyro_mean_over_row);
+  EXPECT_FALSE(to_run_data(log).gyro_mean_over_row);
+  // At the first turn (t = 7 s, wz 0 -> 0.6 rad/s in one cycle) the row after the step reads
+  // the new rate whole, where a row mean would hold only the part of the row after it.
+  const auto row = static_cast<std::size_t>(std::llround(7.01 * 100.0));
+  EXPECT_NEAR(log.samples[row].gyro_wz_radps, 0.6, 0.01);
+  EXPECT_TRUE(testing::simulate_run(nominal, nominal, 2.0, 3).header.gyro_mean_over_row);
+}
+
+// Heading dead-reckoned from the gyro with the true model minus the true heading, per row:
+// max |change over one row| and RMS over the run, rad. Noise-free sensors, so that what is
+// left is the integration's.
+struct HeadingError {
+  double max_row_jump = 0.0;
+  double rms = 0.0;
+};
+
+HeadingError heading_error(const RobotModel& nominal, const RobotModel& truth, const RunLog& log) {
+  const RunData run = to_run_data(log);
+  const SensorReplay replay(nominal, run, 1.0);
+  std::vector<Pose2> path;
+  replay.path(sim::resolve_plant(truth), path);
+  HeadingError e;
+  double previous = 0.0;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const double error = path[k].yaw_rad - run.truth_yaw_rad[k];
+    if (k > 0) e.max_row_jump = std::max(e.max_row_jump, std::abs(error - previous));
+    previous = error;
+    sum += error * error;
+  }
+  e.rms = std::sqrt(sum / static_cast<double>(path.size()));
+  return e;
+}
+
+// The sensor replay integrates the readings at the rows by the trapezoid: across a step of
+// the rate within a row (0.6 rad/s at the figure's first turn) the dead-reckoned heading is
+// off by at most half the step times the row (3 mrad), where taking each reading as the
+// row's mean leaves up to the whole (6 mrad) and all one way.
+TEST(GyroTiming, ReadingsAtTheRowsIntegrateByTheTrapezoid) {
+  const RobotModel nominal = testing::robot("docent");
+  RobotModel truth = hidden_truth(nominal);
+  truth.sensors.gyro.noise_rad_s = 0.0;
+  truth.sensors.motion_capture.position_noise_m = 0.0;
+  truth.sensors.motion_capture.yaw_noise_rad = 0.0;
+  // Steps 3.7 ms into their rows, as the first corner (0.366 of 0.610 rad/s).
+  const RunLog log = testing::record_like_swiveld(nominal, truth, figure(), 30.0, 5, 0.0037);
+  const HeadingError trapezoid = heading_error(nominal, truth, log);
+  constexpr double kLargestStepRadps = 1.3;  // -0.5 -> 0.8 rad/s
+  EXPECT_LT(trapezoid.max_row_jump, 0.5 * kLargestStepRadps * 0.01);
+  RunLog as_means = log;
+  as_means.header.gyro_mean_over_row = true;  // what the replay assumed before
+  const HeadingError means = heading_error(nominal, truth, as_means);
+  EXPECT_GT(means.max_row_jump, 1.5 * trapezoid.max_row_jump);
+  EXPECT_LT(trapezoid.rms, 0.5 * means.rms) << trapezoid.rms << " vs " << means.rms;
+}
+
+}  // namespace
+}  // namespace swivel::model_gap
