@@ -159,6 +159,25 @@ TEST(RobotModel, RejectsNonPositiveGeometry) {
             "robot.yaml:6:3: differential.track_width_m: expected a positive number, got -0.4");
 }
 
+TEST(RobotModel, CountsPerRevolutionAreRealValued) {
+  std::string text = kDocent;
+  text.replace(text.find("4096"), 4, "2796.8");  // a 43.7:1 gear on a 64-count encoder
+  const RobotModel m = parse_robot_model(text, "robot.yaml");
+  EXPECT_EQ(m.sensors.wheel_encoder_counts_per_rev, 2796.8);
+  expect_same(m, parse_robot_model(robot_model_to_yaml(m), "again.yaml"));
+}
+
+TEST(RobotModel, RejectsCountsPerRevolutionThatAreNotPositiveAndFinite) {
+  for (const char* bad : {"0", "-64", ".nan", ".inf", "many"}) {
+    std::string text = kDocent;
+    text.replace(text.find("4096"), 4, bad);
+    EXPECT_NE(
+        error_of(text).find("robot.yaml:8:3: sensors.wheel_encoder_counts_per_rev: expected "),
+        std::string::npos)
+        << bad << ": " << error_of(text);
+  }
+}
+
 TEST(RobotModel, RejectsSectionThatDoesNotMatchDrivetrain) {
   std::string text = kDocent;
   text.replace(text.find("drivetrain: differential"), 24, "drivetrain: swpc");

@@ -83,6 +83,13 @@ std::string fixed(double v, int precision = 2) {
   return s.str();
 }
 
+// Shortest general form: 4096 stays "4096", 2796.8 stays "2796.8".
+std::string general(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 std::string pad(const std::string& text, std::size_t width) {
   return text.size() >= width ? text : std::string(width - text.size(), ' ') + text;
 }
@@ -209,8 +216,8 @@ std::vector<std::string> assumptions(const RobotModel& nominal, const DocentExpe
           fixed(e.wheel_radius_error_max * 100.0, 2) + " %, +" +
           fixed(e.wheel_radius_error_max * 100.0, 2) + " %))",
       "sensors: wheel encoders quantized at " +
-          std::to_string(nominal.sensors.wheel_encoder_counts_per_rev) +
-          " counts/rev; gyro white noise " + fixed(e.gyro_noise_radps, 4) +
+          general(nominal.sensors.wheel_encoder_counts_per_rev) + " counts/rev; gyro white noise " +
+          fixed(e.gyro_noise_radps, 4) +
           " rad/s per sample (a MEMS yaw gyro of the R1050K's class; values assumed, not "
           "from a datasheet); random wheel slip " +
           fixed(e.wheel_slip_std * 100.0, 2) + " % (1-sigma, Gauss-Markov, " +

@@ -40,8 +40,10 @@ struct MotionCaptureParams {
 };
 
 struct SensorParams {
-  int wheel_encoder_counts_per_rev = 4096;
-  int steering_encoder_counts_per_rev = 4096;
+  /// Encoder counts per revolution of the wheel (or steering axis): real-valued, since a
+  /// geared motor's are not an integer (43.7:1 x 64 counts = 2796.8). Finite and > 0.
+  double wheel_encoder_counts_per_rev = 4096.0;
+  double steering_encoder_counts_per_rev = 4096.0;
   GyroParams gyro;
   MotionCaptureParams motion_capture;
 };

@@ -64,11 +64,15 @@ std::vector<SwpcModuleParams> read_swpc(ParamReader r) {
 
 SensorParams read_sensors(ParamReader r) {
   SensorParams s;
-  constexpr int kMaxCounts = 1 << 30;
+  // Real-valued: a geared motor's counts per wheel revolution are not an integer.
+  const auto counts = [&r](const std::string& key, double fallback) {
+    if (!r.has(key)) return r.number_or(key, fallback);  // marks the key as known
+    return positive(r, key);
+  };
   s.wheel_encoder_counts_per_rev =
-      r.integer_or("wheel_encoder_counts_per_rev", s.wheel_encoder_counts_per_rev, 1, kMaxCounts);
-  s.steering_encoder_counts_per_rev = r.integer_or(
-      "steering_encoder_counts_per_rev", s.steering_encoder_counts_per_rev, 1, kMaxCounts);
+      counts("wheel_encoder_counts_per_rev", s.wheel_encoder_counts_per_rev);
+  s.steering_encoder_counts_per_rev =
+      counts("steering_encoder_counts_per_rev", s.steering_encoder_counts_per_rev);
   ParamReader gyro = r.child("gyro");
   s.gyro.scale = gyro.number_or("scale", s.gyro.scale, 0.5, 2.0);
   s.gyro.bias_rad_s = gyro.number_or("bias_rad_s", s.gyro.bias_rad_s, -1.0, 1.0);
@@ -256,8 +260,8 @@ std::string robot_model_to_yaml(const RobotModel& model) {
   }
   const auto& s = model.sensors;
   out << "sensors:\n"
-      << "  wheel_encoder_counts_per_rev: " << s.wheel_encoder_counts_per_rev << "\n"
-      << "  steering_encoder_counts_per_rev: " << s.steering_encoder_counts_per_rev << "\n";
+      << "  wheel_encoder_counts_per_rev: " << num(s.wheel_encoder_counts_per_rev) << "\n"
+      << "  steering_encoder_counts_per_rev: " << num(s.steering_encoder_counts_per_rev) << "\n";
   out << "  gyro: {scale: " << num(s.gyro.scale) << ", bias_rad_s: " << num(s.gyro.bias_rad_s)
       << ", noise_rad_s: " << num(s.gyro.noise_rad_s) << "}\n"
       << "  motion_capture: {position_noise_m: " << num(s.motion_capture.position_noise_m)

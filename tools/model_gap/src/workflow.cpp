@@ -109,8 +109,8 @@ double heading_floor(const RobotModel& m) {
   const double y = m.sensors.motion_capture.yaw_noise_rad;
   return std::max(2.0 * y * y / kAnchorRows, 1e-14);
 }
-double count_floor(int counts_per_rev) {
-  const double q = 2.0 * std::numbers::pi / std::max(counts_per_rev, 1);
+double count_floor(double counts_per_rev) {
+  const double q = 2.0 * std::numbers::pi / std::max(counts_per_rev, 1.0);
   return q * q / 6.0;
 }
 

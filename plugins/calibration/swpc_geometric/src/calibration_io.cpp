@@ -157,10 +157,9 @@ CalibrationInput calibration_input_from_logs(const std::vector<RunLog>& logs,
 
 CalibrationOptions calibration_options_for(const RobotModel& model) {
   CalibrationOptions options;
-  const int counts = model.sensors.steering_encoder_counts_per_rev;
-  if (counts > 0) {
-    options.steer_encoder_sigma_rad =
-        2.0 * std::numbers::pi / static_cast<double>(counts) / std::sqrt(12.0);
+  const double counts = model.sensors.steering_encoder_counts_per_rev;
+  if (counts > 0.0) {
+    options.steer_encoder_sigma_rad = 2.0 * std::numbers::pi / counts / std::sqrt(12.0);
   }
   return options;
 }

@@ -30,7 +30,7 @@ void DifferentialDrivetrain::configure(const PluginContext& ctx) {
     throw ConfigError(ctx.robot->source_file +
                       ": drivetrain: expected 'differential' for the differential plugin");
   }
-  const int counts = ctx.robot->sensors.wheel_encoder_counts_per_rev;
+  const double counts = ctx.robot->sensors.wheel_encoder_counts_per_rev;
   const double margin_rad =
       counts > 0 ? 4.0 * 2.0 * std::numbers::pi / counts : kDefaultPlausibilityMarginRad;
   try {

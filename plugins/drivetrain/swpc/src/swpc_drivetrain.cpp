@@ -78,8 +78,8 @@ void SwpcDrivetrain::configure(const PluginContext& ctx) {
   if (ctx.robot->limits.steering_rate_radps) {
     limits.commanded_steer_rate_radps = *ctx.robot->limits.steering_rate_radps;
   }
-  const int counts = std::min(ctx.robot->sensors.wheel_encoder_counts_per_rev,
-                              ctx.robot->sensors.steering_encoder_counts_per_rev);
+  const double counts = std::min(ctx.robot->sensors.wheel_encoder_counts_per_rev,
+                                 ctx.robot->sensors.steering_encoder_counts_per_rev);
   if (counts > 0) limits.plausibility_margin_rad = 4.0 * 2.0 * std::numbers::pi / counts;
   try {
     configure(ctx.robot->modules, limits);

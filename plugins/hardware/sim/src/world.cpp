@@ -104,8 +104,8 @@ double World::gaussian(std::mt19937_64& rng) noexcept {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
 }
 
-double World::quantize(double angle_rad, int counts_per_rev) const noexcept {
-  if (!options_.quantize_encoders || counts_per_rev <= 0) return angle_rad;
+double World::quantize(double angle_rad, double counts_per_rev) const noexcept {
+  if (!options_.quantize_encoders || !(counts_per_rev > 0.0)) return angle_rad;
   const double q = kTwoPi / counts_per_rev;
   return std::floor(angle_rad / q + 0.5) * q;
 }

@@ -132,7 +132,7 @@ class World {
   void record_history() noexcept;
   void sensor_sample_at(double t_s, SensorSample& out) const noexcept;
   static double gaussian(std::mt19937_64& rng) noexcept;
-  [[nodiscard]] double quantize(double angle_rad, int counts_per_rev) const noexcept;
+  [[nodiscard]] double quantize(double angle_rad, double counts_per_rev) const noexcept;
 
   PlantParams plant_;
   SimOptions options_;
