@@ -23,7 +23,7 @@ bool same(const swivel::RunLogSample& a, const swivel::RunLogSample& b, std::siz
   }
   if (a.t_s != b.t_s || a.cmd.vx_mps != b.cmd.vx_mps || a.cmd.vy_mps != b.cmd.vy_mps ||
       a.cmd.wz_radps != b.cmd.wz_radps || a.gyro_wz_radps != b.gyro_wz_radps ||
-      a.has_truth != b.has_truth) {
+      a.has_truth != b.has_truth || a.has_gyro != b.has_gyro || a.has_cmd != b.has_cmd) {
     return false;
   }
   for (std::size_t i = 0; i < modules; ++i) {

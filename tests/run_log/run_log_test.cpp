@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <sstream>
 #include <string>
 
@@ -292,6 +293,87 @@ TEST(RunLog, BadEstimateColumnsAreReported) {
             "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw' "
             "(optionally followed by ',est_x,est_y,est_yaw,fault'), got "
             "'t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw,est_x'");
+}
+
+TEST(RunLog, EmptyGyroAndCommandCellsMeanNoSample) {
+  const std::string text = std::string(kDifferentialHead) +
+                           "0,,,,0,0,,1,2,3\n"             // neither gyro nor command
+                           "0.05,0.1,0,0.2,0.5,0.6,,,,\n"  // a command, no gyro
+                           "0.1,,,,1,1.2,0.25,,,\n";       // a gyro sample, no command
+  std::istringstream in(text);
+  const RunLog log = parse_run_log(in, "lab.csv");
+  ASSERT_EQ(log.samples.size(), 3U);
+  EXPECT_FALSE(log.samples[0].has_gyro);
+  EXPECT_FALSE(log.samples[0].has_cmd);
+  EXPECT_EQ(log.samples[0].gyro_wz_radps, 0.0);
+  EXPECT_EQ(log.samples[0].cmd.vx_mps, 0.0);
+  EXPECT_TRUE(log.samples[0].has_truth);
+  EXPECT_FALSE(log.samples[1].has_gyro);
+  EXPECT_TRUE(log.samples[1].has_cmd);
+  EXPECT_EQ(log.samples[1].cmd.wz_radps, 0.2);
+  EXPECT_TRUE(log.samples[2].has_gyro);
+  EXPECT_EQ(log.samples[2].gyro_wz_radps, 0.25);
+  EXPECT_FALSE(log.samples[2].has_cmd);
+
+  // Written back, the absent samples are empty cells again, whatever the fields hold.
+  std::ostringstream out;
+  RunLogWriter writer(out, log.header);
+  for (RunLogSample s : log.samples) {
+    if (!s.has_gyro) s.gyro_wz_radps = 9.0;
+    if (!s.has_cmd) s.cmd = Twist2{9.0, 9.0, 9.0};
+    writer.write(s);
+  }
+  EXPECT_EQ(out.str(), text);
+}
+
+TEST(RunLog, PartlyEmptyCommandCellsNameLineAndColumn) {
+  EXPECT_EQ(
+      expect_error(std::string(kDifferentialHead) + "0,0,0,0,0,0,0,,,\n0.1,0.2,,0,0,0,0,,,\n"),
+      "run.csv:6: column cmd_vy: empty, but cmd_vx, cmd_vy and cmd_wz must be all present "
+      "or all empty");
+  EXPECT_EQ(expect_error(std::string(kDifferentialHead) + "0,,0,,0,0,0,,,\n"),
+            "run.csv:5: column cmd_vx and cmd_wz: empty, but cmd_vx, cmd_vy and cmd_wz must be "
+            "all present or all empty");
+}
+
+TEST(RunLog, UnwrapNearMovesByWholeTurns) {
+  const double turn = 2.0 * std::numbers::pi;
+  EXPECT_DOUBLE_EQ(unwrap_near(-3.1, 3.1), -3.1 + turn);
+  EXPECT_DOUBLE_EQ(unwrap_near(3.1, -3.1), 3.1 - turn);
+  EXPECT_DOUBLE_EQ(unwrap_near(0.2, 0.1), 0.2);
+  EXPECT_DOUBLE_EQ(unwrap_near(-3.0, 3.0 + 2.0 * turn), -3.0 + 3.0 * turn);
+}
+
+TEST(RunLog, WrappedSteeringReadsLikeItsUnwrappedTwin) {
+  // Module 1 turns steadily through +pi twice; module 2 turns the other way through -pi.
+  constexpr int kRows = 200;
+  RunLog wrapped;
+  wrapped.header = swpc_header(2);
+  RunLog twin = wrapped;
+  for (int k = 0; k < kRows; ++k) {
+    RunLogSample s;
+    s.t_s = 0.01 * k;
+    s.steer_rad[0] = 2.9 + 0.07 * k;
+    s.steer_rad[1] = -3.0 - 0.05 * k;
+    twin.samples.push_back(s);
+    for (std::size_t i = 0; i < 2; ++i) {
+      // what an absolute encoder reports: (-pi, pi]
+      s.steer_rad[i] = std::remainder(s.steer_rad[i], 2.0 * std::numbers::pi);
+      if (s.steer_rad[i] <= -std::numbers::pi) s.steer_rad[i] += 2.0 * std::numbers::pi;
+    }
+    wrapped.samples.push_back(s);
+  }
+  ASSERT_GT(twin.samples.back().steer_rad[0], 3.0 * std::numbers::pi);  // it does wrap, twice
+  unwrap_steering(wrapped);
+  RunLog unchanged = twin;
+  unwrap_steering(unchanged);
+  for (int k = 0; k < kRows; ++k) {
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_NEAR(wrapped.samples[k].steer_rad[i], twin.samples[k].steer_rad[i], 1e-12)
+          << "row " << k << " module " << i + 1;
+      EXPECT_EQ(unchanged.samples[k].steer_rad[i], twin.samples[k].steer_rad[i]);
+    }
+  }
 }
 
 TEST(RunLog, WriterRejectsImpossibleHeaders) {

@@ -10,7 +10,12 @@
 //   t,cmd_vx,cmd_vy,cmd_wz,wheel_l,wheel_r,gyro_wz,truth_x,truth_y,truth_yaw
 //
 // swpc rows carry steer_1..steer_N then wheel_1..wheel_N in place of wheel_l, wheel_r.
-// The truth columns (motion capture) are empty where a row has no sample.
+// The truth columns (motion capture) are empty where a row has no sample. An empty gyro_wz
+// cell means the row has no gyro sample (a robot without a gyro), and three empty cmd_* cells
+// mean no command was logged (a log from elsewhere); one or two empty command cells are an
+// error. Steering angles may be wrapped to (-pi, pi], as absolute encoders report them: the
+// reader keeps them as written, and offline tools unwrap them with unwrap_steering() or
+// unwrap_near().
 //
 // Optional trailing columns, written only when RunLogHeader::estimate_columns is set (the
 // reader tells from the header row whether a log has them; logs without them read as before):
@@ -99,7 +104,11 @@ struct RunLogSample {
   Twist2 cmd;                                   ///< body twist commanded at t_s (a sample)
   std::array<double, kMaxModules> wheel_rad{};  ///< cumulative encoder angles
   std::array<double, kMaxModules> steer_rad{};  ///< measured steering angles (swpc)
-  double gyro_wz_radps = 0.0;
+  double gyro_wz_radps = 0.0;                   ///< meaningful only when has_gyro
+  /// A gyro sample belongs to this row; false: the gyro_wz cell is empty (and gyro_wz_radps 0).
+  bool has_gyro = true;
+  /// The command columns hold a command; false: all three are empty (and cmd is zero).
+  bool has_cmd = true;
   bool has_truth = false;  ///< a motion-capture sample belongs to this row
   Pose2 truth;             ///< world frame; meaningful only when has_truth
   /// The pose estimate at t_s, world frame, and the active fault (swivel::FaultCode, 0:
@@ -160,12 +169,23 @@ class RunLogWriter {
 /// Reads a run log. Unknown `#` comment lines are ignored; blank lines are skipped.
 /// @throws RunLogError naming the file and line: missing `# swivel-run` or `# drivetrain`
 ///   line, unsupported version, missing or wrong header row, a row with the wrong number
-///   of columns, a cell that is not a finite number, partly empty truth columns, a fault
-///   cell that is not an integer in [0, 65535], or time going backwards.
+///   of columns, a cell that is not a finite number, partly empty truth or command columns, a
+///   fault cell that is not an integer in [0, 65535], or time going backwards.
 RunLog read_run_log(const std::string& path);
 
 /// Parses a run log from a stream; `source_name` is used in messages.
 /// @throws RunLogError as read_run_log.
 RunLog parse_run_log(std::istream& in, const std::string& source_name);
+
+/// `angle_rad` moved by whole turns to within half a turn of `reference_rad`: the next value of
+/// an unwrapped angle whose reading wraps (a sensor never turns half a turn between two rows).
+/// Real-time safe.
+double unwrap_near(double angle_rad, double reference_rad) noexcept;
+
+/// Makes every module's steering column of an swpc log continuous in place: the first row is
+/// kept and each later angle moved by whole turns to within half a turn of the row before
+/// (unwrap_near), so a log wrapped to (-pi, pi] reads the same as its unwrapped twin. Does
+/// nothing to a differential log.
+void unwrap_steering(RunLog& log);
 
 }  // namespace swivel

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "swivel/run_log.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <istream>
+#include <numbers>
 #include <ostream>
 #include <string_view>
 #include <system_error>
@@ -249,14 +251,36 @@ class Parser {
         return v;
       };
       s.t_s = next();
-      s.cmd.vx_mps = next();
-      s.cmd.vy_mps = next();
-      s.cmd.wz_radps = next();
+      const std::size_t empty_cmd = static_cast<std::size_t>(cells_[1].empty()) +
+                                    static_cast<std::size_t>(cells_[2].empty()) +
+                                    static_cast<std::size_t>(cells_[3].empty());
+      if (empty_cmd == 0) {
+        s.cmd.vx_mps = next();
+        s.cmd.vy_mps = next();
+        s.cmd.wz_radps = next();
+      } else if (empty_cmd == 3) {
+        s.has_cmd = false;  // no command logged
+        c += 3;
+      } else {
+        std::string empty_names;
+        for (std::size_t i = 1; i <= 3; ++i) {
+          if (!cells_[i].empty()) continue;
+          if (!empty_names.empty()) empty_names += " and ";
+          empty_names += names[i];
+        }
+        fail("column " + empty_names +
+             ": empty, but cmd_vx, cmd_vy and cmd_wz must be all present or all empty");
+      }
       if (swpc) {
         for (std::size_t i = 0; i < n; ++i) s.steer_rad[i] = next();
       }
       for (std::size_t i = 0; i < n; ++i) s.wheel_rad[i] = next();
-      s.gyro_wz_radps = next();
+      if (cells_[c].empty()) {
+        s.has_gyro = false;  // no gyro sample
+        ++c;
+      } else {
+        s.gyro_wz_radps = next();
+      }
       const std::size_t empty = static_cast<std::size_t>(cells_[c].empty()) +
                                 static_cast<std::size_t>(cells_[c + 1].empty()) +
                                 static_cast<std::size_t>(cells_[c + 2].empty());
@@ -364,15 +388,23 @@ void RunLogWriter::write(const RunLogSample& s) {
     line_ += ',';
   };
   add(s.t_s);
-  add(s.cmd.vx_mps);
-  add(s.cmd.vy_mps);
-  add(s.cmd.wz_radps);
+  if (s.has_cmd) {
+    add(s.cmd.vx_mps);
+    add(s.cmd.vy_mps);
+    add(s.cmd.wz_radps);
+  } else {
+    line_ += ",,,";  // three empty command cells
+  }
   const std::size_t n = header_.module_count;
   if (header_.drivetrain == DrivetrainKind::kSwpc) {
     for (std::size_t i = 0; i < n; ++i) add(s.steer_rad[i]);
   }
   for (std::size_t i = 0; i < n; ++i) add(s.wheel_rad[i]);
-  add(s.gyro_wz_radps);
+  if (s.has_gyro) {
+    add(s.gyro_wz_radps);
+  } else {
+    line_ += ',';  // an empty gyro cell
+  }
   if (s.has_truth) {
     add(s.truth.x_m);
     add(s.truth.y_m);
@@ -405,6 +437,22 @@ RunLog read_run_log(const std::string& path) {
 
 RunLog parse_run_log(std::istream& in, const std::string& source_name) {
   return Parser(in, source_name).parse();
+}
+
+double unwrap_near(double angle_rad, double reference_rad) noexcept {
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  return angle_rad - kTurn * std::round((angle_rad - reference_rad) / kTurn);
+}
+
+void unwrap_steering(RunLog& log) {
+  if (log.header.drivetrain != DrivetrainKind::kSwpc) return;
+  const std::size_t n = std::min<std::size_t>(log.header.module_count, kMaxModules);
+  for (std::size_t k = 1; k < log.samples.size(); ++k) {
+    for (std::size_t i = 0; i < n; ++i) {
+      double& phi = log.samples[k].steer_rad[i];
+      phi = unwrap_near(phi, log.samples[k - 1].steer_rad[i]);
+    }
+  }
 }
 
 }  // namespace swivel

@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <limits>
-#include <numbers>
 
 #include "swivel/model_gap/run_log_adapter.hpp"
 #include "swivel/run_log.hpp"
@@ -26,28 +25,33 @@ RunData to_run_data(const RunLog& log) {
   if (d.drivetrain == DrivetrainKind::kSwpc) d.steer_rad.assign(d.module_count, {});
   for (const RunLogSample& s : log.samples) {
     d.t_s.push_back(s.t_s);
-    d.cmd_vx_mps.push_back(s.cmd.vx_mps);
-    d.cmd_vy_mps.push_back(s.cmd.vy_mps);
-    d.cmd_wz_radps.push_back(s.cmd.wz_radps);
+    d.cmd_vx_mps.push_back(s.has_cmd ? s.cmd.vx_mps : kNaN);
+    d.cmd_vy_mps.push_back(s.has_cmd ? s.cmd.vy_mps : kNaN);
+    d.cmd_wz_radps.push_back(s.has_cmd ? s.cmd.wz_radps : kNaN);
+    d.has_commands = d.has_commands && s.has_cmd;
     for (std::size_t i = 0; i < d.module_count; ++i) {
       d.wheel_rad[i].push_back(s.wheel_rad[i]);
-      if (!d.steer_rad.empty()) d.steer_rad[i].push_back(s.steer_rad[i]);
+      if (!d.steer_rad.empty()) {
+        // Absolute steering encoders wrap to (-pi, pi]; the replays difference these.
+        const double phi = s.steer_rad[i];
+        d.steer_rad[i].push_back(d.steer_rad[i].empty() ? phi
+                                                        : unwrap_near(phi, d.steer_rad[i].back()));
+      }
     }
-    d.gyro_radps.push_back(s.gyro_wz_radps);
+    d.gyro_radps.push_back(s.has_gyro ? s.gyro_wz_radps : kNaN);
+    d.has_gyro = d.has_gyro && s.has_gyro;
     d.truth_x_m.push_back(s.has_truth ? s.truth.x_m : kNaN);
     d.truth_y_m.push_back(s.has_truth ? s.truth.y_m : kNaN);
     d.truth_yaw_rad.push_back(s.has_truth ? s.truth.yaw_rad : kNaN);
   }
+  for (const std::string& comment : log.header.comments) {
+    if (comment == "truth_clock: shared") d.truth_clock_shared = true;
+  }
   // Motion capture reports a wrapped heading; unwrapped it interpolates and plots cleanly.
-  double offset = 0.0;
   double previous = kNaN;
   for (double& yaw : d.truth_yaw_rad) {
     if (!std::isfinite(yaw)) continue;
-    if (std::isfinite(previous)) {
-      const double jump = yaw + offset - previous;
-      offset -= 2.0 * std::numbers::pi * std::round(jump / (2.0 * std::numbers::pi));
-    }
-    yaw += offset;
+    if (std::isfinite(previous)) yaw = unwrap_near(yaw, previous);
     previous = yaw;
   }
   return d;

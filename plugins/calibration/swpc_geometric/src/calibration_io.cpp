@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "swivel/calibration/calibration_io.hpp"
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -98,7 +99,13 @@ LockedRun locked_run_from_log(const RunLog& log, const LockSpec& lock) {
   RunSeries& d = run.data;
   d.wheel_angle_rad.assign(n, {});
   d.steer_angle_rad.assign(n, {});
-  for (const RunLogSample& s : log.samples) {
+  // Steering encoders may wrap to (-pi, pi]: unwrapped over every row, not only those kept.
+  std::array<double, kMaxModules> steer{};
+  for (std::size_t k = 0; k < log.samples.size(); ++k) {
+    const RunLogSample& s = log.samples[k];
+    for (std::size_t m = 0; m < n; ++m) {
+      steer[m] = k == 0 ? s.steer_rad[m] : unwrap_near(s.steer_rad[m], steer[m]);
+    }
     if (!s.has_truth) continue;
     d.t_s.push_back(s.t_s);
     d.x_m.push_back(s.truth.x_m);
@@ -106,7 +113,7 @@ LockedRun locked_run_from_log(const RunLog& log, const LockSpec& lock) {
     d.yaw_rad.push_back(s.truth.yaw_rad);
     for (std::size_t m = 0; m < n; ++m) {
       d.wheel_angle_rad[m].push_back(s.wheel_rad[m]);
-      d.steer_angle_rad[m].push_back(s.steer_rad[m]);
+      d.steer_angle_rad[m].push_back(steer[m]);
     }
   }
   if (d.t_s.size() < 2) {

@@ -84,6 +84,30 @@ TEST(CalibrationIoTest, DeclaredAngleFarFromTheEncoderIsRejected) {
       << msg;
 }
 
+TEST(CalibrationIoTest, WrappedSteeringReadsLikeItsUnwrappedTwin) {
+  // Locked at 180 deg, the absolute encoder flickers between +pi - e and -pi + e; module 3
+  // turns through +pi while the robot moves.
+  RunLog wrapped = make_log(1, 0.0, "");
+  RunLog twin = wrapped;
+  for (std::size_t k = 0; k < wrapped.samples.size(); ++k) {
+    const double flicker = k % 2 == 0 ? -0.002 : 0.002;
+    twin.samples[k].steer_rad[1] = std::numbers::pi + flicker;
+    twin.samples[k].steer_rad[2] = 3.0 + 0.05 * static_cast<double>(k);
+    for (std::size_t m = 1; m < 3; ++m) {
+      wrapped.samples[k].steer_rad[m] =
+          std::remainder(twin.samples[k].steer_rad[m], 2.0 * std::numbers::pi);
+    }
+  }
+  const LockedRun a = locked_run_from_log(wrapped, {1, 180.0 * kDeg});
+  const LockedRun b = locked_run_from_log(twin, {1, 180.0 * kDeg});
+  EXPECT_NEAR(a.locked_steer_meas_rad, b.locked_steer_meas_rad, 1e-12);
+  EXPECT_NEAR(a.locked_steer_meas_rad, std::numbers::pi, 0.002);
+  ASSERT_EQ(a.data.steer_angle_rad[2].size(), b.data.steer_angle_rad[2].size());
+  for (std::size_t k = 0; k < a.data.steer_angle_rad[2].size(); ++k) {
+    EXPECT_NEAR(a.data.steer_angle_rad[2][k], b.data.steer_angle_rad[2][k], 1e-12) << k;
+  }
+}
+
 TEST(CalibrationIoTest, ModuleOutOfRangeAndDifferentRobotsAreRejected) {
   const RunLog log = make_log(1, 0.8, "");
   EXPECT_NE(message_of([&] {

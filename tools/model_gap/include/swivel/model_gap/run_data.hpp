@@ -18,16 +18,25 @@ struct RunData {
   /// gyro_radps[k] is the mean rate over (t[k-1], t[k]] (the log's `# gyro_wz: mean over the
   /// row`); false: the reading at t[k] (swivel/run_log.hpp).
   bool gyro_mean_over_row = false;
+  /// Every row has a gyro sample. A log with no gyro, or mixing rows with and without one, has
+  /// false: the workflow treats a run as having a gyro channel only when it is complete.
+  bool has_gyro = true;
+  /// Every row has a logged command (false as for has_gyro when any row has none).
+  bool has_commands = true;
   std::vector<double> t_s;
-  std::vector<double> cmd_vx_mps;
+  std::vector<double> cmd_vx_mps;  ///< NaN where the row has no command
   std::vector<double> cmd_vy_mps;
   std::vector<double> cmd_wz_radps;
   std::vector<std::vector<double>> wheel_rad;  ///< [module][sample], cumulative
-  std::vector<std::vector<double>> steer_rad;  ///< [module][sample], swpc only
-  std::vector<double> gyro_radps;
-  std::vector<double> truth_x_m;  ///< NaN where there is no motion-capture sample
+  /// [module][sample], swpc only; unwrapped (continuous across +-pi) whatever the log held.
+  std::vector<std::vector<double>> steer_rad;
+  std::vector<double> gyro_radps;  ///< NaN where the row has no gyro sample
+  std::vector<double> truth_x_m;   ///< NaN where there is no motion-capture sample
   std::vector<double> truth_y_m;
   std::vector<double> truth_yaw_rad;
+  /// The motion capture is stamped on the robot's own clock (`# truth_clock: shared`, e.g.
+  /// a simulator's): its time offset is known to be zero and is not fitted.
+  bool truth_clock_shared = false;
 
   [[nodiscard]] std::size_t size() const { return t_s.size(); }
   [[nodiscard]] CommandSeries commands() const {
