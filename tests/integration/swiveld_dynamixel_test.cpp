@@ -196,3 +196,69 @@ TEST(SwiveldDynamixel, HardwareErrorBitStopsTheRobotWithItsMeaning) {
        [](dxl::Emulator& e) { e.set_hardware_error(2, dxl::hardware_error::kOverheating); },
        "dynamixel ID 2 (right wheel): HW error: overheating"});
 }
+
+// The daemon killed outright (no shutdown): the servos' Bus Watchdog, armed at activation and
+// fed by every bus cycle, stops each of them within its period by itself (e-Manual "Bus
+// Watchdog(98)": the servo stops, the value turns to -1). Without it the wheels kept their
+// last goals.
+TEST(SwiveldDynamixel, SigkillLeavesTheServosStoppedByTheirWatchdog) {
+  dxl::Emulator emulator(servo_ids({1, 2}));
+  const std::string dir = make_test_dir("dxl_sigkill");
+  constexpr double kWatchdogS = 0.26;  // 13 x 20 ms
+  const std::string params = "{port: " + emulator.port() +
+                             ", reply_timeout_s: 0.1, stale_timeout_s: 1.0, bus_watchdog_s: 0.26, "
+                             "left: {id: 1}, right: {id: 2, direction: -1}}";
+  const std::string config = write_config(dir, "docent", params, kArc);
+  Child daemon(swiveld_exe(), {"--config", config, "--no-dds"});
+  ASSERT_FALSE(daemon.wait_for(2s)) << "exited early:\n" << daemon.err();
+  ASSERT_NE(emulator.goal_velocity(1), 0) << "not driving:\n" << daemon.err();
+  EXPECT_EQ(emulator.bus_watchdog(1), 13);
+  EXPECT_EQ(emulator.bus_watchdog(2), 13);
+  EXPECT_TRUE(emulator.watchdog_expiries().empty()) << "expired while the daemon ran";
+  const double killed_s = monotonic_s();
+  daemon.signal(SIGKILL);
+  ASSERT_TRUE(daemon.wait_for(2s));
+  std::this_thread::sleep_for(0.6s);
+  const auto expiries = emulator.watchdog_expiries();
+  for (const std::uint8_t id : std::vector<std::uint8_t>{1, 2}) {
+    std::optional<dxl::Emulator::WatchdogExpiry> expiry;
+    for (const auto& e : expiries) {
+      if (e.id == id) expiry = e;
+    }
+    ASSERT_TRUE(expiry) << "ID " << int(id) << " still driving";
+    // From its last instruction packet, sent before the kill (5 ms for the emulator's poll).
+    EXPECT_LE(expiry->time_s - killed_s, kWatchdogS + 0.005) << "ID " << int(id);
+    EXPECT_EQ(emulator.bus_watchdog(id), dxl::kBusWatchdogExpired) << "ID " << int(id);
+    EXPECT_EQ(emulator.present_velocity(id), 0) << "ID " << int(id);
+  }
+  const std::int32_t before = emulator.present_position(1);
+  std::this_thread::sleep_for(0.2s);
+  (void)emulator.present_velocity(1);  // advances the emulated motors to now
+  EXPECT_EQ(emulator.present_position(1), before) << "the wheel still turns";
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
+}
+
+// A shutdown that cannot confirm every servo's torque is off says so and exits non-zero
+// (a service manager sees a failed stop), instead of "stopped cleanly" and 0.
+TEST(SwiveldDynamixel, ShutdownWithTorqueOffNotConfirmedExitsNonZero) {
+  dxl::Emulator emulator(servo_ids({1, 2}));
+  const std::string dir = make_test_dir("dxl_unconfirmed");
+  const std::string config = write_config(dir, "docent", docent_params(emulator.port()), kArc);
+  Child daemon(swiveld_exe(), {"--config", config, "--no-dds"});
+  ASSERT_FALSE(daemon.wait_for(1.5s)) << "exited early:\n" << daemon.err();
+  emulator.set_silent(2, true);
+  ASSERT_TRUE(daemon.wait_for_err("no status packet in time", 5s)) << daemon.err();
+  daemon.signal(SIGTERM);
+  const auto status = daemon.wait_for(5s);
+  ASSERT_TRUE(status) << "still running 5 s after SIGTERM";
+  ASSERT_TRUE(WIFEXITED(*status)) << daemon.err();
+  EXPECT_NE(WEXITSTATUS(*status), 0) << daemon.err();
+  EXPECT_NE(daemon.err().find("dynamixel ID 2 (right wheel): torque off not confirmed"),
+            std::string::npos)
+      << daemon.err();
+  EXPECT_NE(daemon.err().find("stopped, but the drives were not confirmed off"), std::string::npos)
+      << daemon.err();
+  EXPECT_EQ(daemon.err().find("stopped cleanly"), std::string::npos) << daemon.err();
+  EXPECT_EQ(emulator.torque_enable(1), 0) << "the servo that answers is off";
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
+}

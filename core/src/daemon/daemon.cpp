@@ -296,7 +296,7 @@ void Daemon::stop() noexcept {
   // 3. The drives off.
   if (hardware_active_) {
     hardware_active_ = false;
-    deactivate_hardware(*hardware_, config_.hardware.plugin);
+    hardware_stopped_ = deactivate_hardware(*hardware_, config_.hardware.plugin);
   }
   // 4. Only now everything around the loop. The bridge's threads stop before the runner is
   //    destroyed, since the runner publishes through the bridge.

@@ -19,7 +19,7 @@ std::string activate_hardware(Hardware& hardware) {
   }
 }
 
-void deactivate_hardware(Hardware& hardware, const std::string& plugin) noexcept {
+bool deactivate_hardware(Hardware& hardware, const std::string& plugin) noexcept {
   try {
     std::string failure;
     try {
@@ -32,11 +32,12 @@ void deactivate_hardware(Hardware& hardware, const std::string& plugin) noexcept
     }
     if (failure.empty()) {
       spdlog::info("hardware {} deactivated", plugin);
-    } else {
-      spdlog::error("hardware {} failed to deactivate: {}", plugin, failure);
+      return true;
     }
+    spdlog::error("hardware {} failed to deactivate: {}", plugin, failure);
   } catch (...) {
   }
+  return false;
 }
 
 }  // namespace swivel::daemon

@@ -15,6 +15,7 @@ namespace swivel::daemon {
 std::string activate_hardware(Hardware& hardware);
 
 /// Hardware::deactivate(), logged as done or failed with the reason; `plugin` names it.
-void deactivate_hardware(Hardware& hardware, const std::string& plugin) noexcept;
+/// False when it failed (the drives may not be off).
+bool deactivate_hardware(Hardware& hardware, const std::string& plugin) noexcept;
 
 }  // namespace swivel::daemon

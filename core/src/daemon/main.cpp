@@ -69,6 +69,11 @@ int run(int argc, char** argv) {
     daemon.stop();
     std::fflush(stdout);
     if (!options.record_path.empty()) spdlog::info("run log written to {}", options.record_path);
+    if (!daemon.hardware_stopped()) {
+      // The loop's last setpoints were zero, but the drives did not confirm they are off.
+      spdlog::error("stopped, but the drives were not confirmed off (see above)");
+      return 1;
+    }
     spdlog::info("stopped cleanly: robot at zero velocity");
     return 0;
   } catch (const swivel::ConfigError& e) {

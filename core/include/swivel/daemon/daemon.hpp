@@ -117,6 +117,10 @@ class Daemon {
   /// the watcher, the bridge, the calibration runner and the recorder. Idempotent.
   void stop() noexcept;
 
+  /// After stop(): false when the hardware's deactivate() failed (the drives were not
+  /// confirmed off; its message was logged).
+  [[nodiscard]] bool hardware_stopped() const noexcept { return hardware_stopped_; }
+
   /// Prints a status line every status period, sends the watchdog while the loop advances
   /// and performs reloads (SIGHUP, file change, DDS request) until SIGTERM or SIGINT
   /// arrives. `signals` must hold SIGTERM, SIGINT and SIGHUP, blocked in every thread.
@@ -185,6 +189,7 @@ class Daemon {
   std::atomic<bool> reload_requested_{false};
   std::atomic<bool> stopping_{false};  // stop() began: no more commands or requests
   bool hardware_active_ = false;       // activate() succeeded, deactivate() not yet called
+  bool hardware_stopped_ = true;       // no deactivate() failed
 };
 
 }  // namespace swivel::daemon

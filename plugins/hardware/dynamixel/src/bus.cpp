@@ -51,12 +51,20 @@ BusResult Bus::receive(std::uint8_t id, double deadline_s) noexcept {
   }
 }
 
-BusResult Bus::ping(std::uint8_t id, double timeout_s, std::uint8_t& error) noexcept {
+BusResult Bus::ping(std::uint8_t id, double timeout_s, std::uint8_t& error,
+                    std::uint16_t* model) noexcept {
   PacketBuilder b(id, Instruction::kPing);
   const double deadline = monotonic_s() + timeout_s;
   if (BusResult r = send(build_ping(b)); r != BusResult::kOk) return r;
   const BusResult r = receive(id, deadline);
-  if (r == BusResult::kOk) error = parser_.packet().error();
+  if (r != BusResult::kOk) return r;
+  const Packet& p = parser_.packet();
+  error = p.error();
+  // Protocol 2.0 PING status: model number (2 bytes) and firmware version.
+  if (model != nullptr) {
+    if (p.data().size() < 3) return BusResult::kBadReply;
+    *model = get_u16(p.data(), 0);
+  }
   return r;
 }
 

@@ -10,11 +10,18 @@
 // Hardware Error Status. read() and write() only exchange with that thread through lock-free
 // latest-value buffers.
 //
-// Faults (read() returns kError with a fixed message naming the servo; latched until a clear
-// re-activates): a status packet missing or later than reply_timeout_s; max_crc_errors
-// consecutive bad CRCs from one servo; a hardware error bit (with its meaning); an error
-// number in a status; no new reading from the bus thread for stale_timeout_s. From the
-// fault on, the bus thread commands zero wheel velocity and holds the steering itself.
+// The servos' Bus Watchdog (address 98) is armed at activation with bus_watchdog_s, fed by
+// every bus cycle and disarmed at deactivation: when the daemon dies, the servos stop by
+// themselves within that time.
+//
+// Faults (read() returns kError with a fixed message naming the servo, or the port;
+// latched until a clear re-activates): a status packet missing or later than
+// reply_timeout_s; max_crc_errors consecutive bad CRCs from one servo; a hardware error bit
+// (with its meaning); an error number in a status; a servo's bus watchdog expired; a wheel
+// goal beyond a servo's Velocity Limit (unless clamped); the port failed (an unplugged
+// adapter: a clear closes and reopens it); no new reading from the bus thread for
+// stale_timeout_s. From the fault on, the bus thread commands zero wheel velocity and holds
+// the steering itself.
 
 #include <array>
 #include <atomic>
@@ -42,8 +49,11 @@ class DynamixelHardware final : public Hardware {
     kCrcRun,
     kHardwareError,
     kStatusError,
+    kWatchdog,
+    kVelocityLimit,
     kPort,
   };
+  static constexpr std::size_t kFaultKinds = 8;
   /// The hardware-error meanings a message exists for (hardware_error_text()).
   static constexpr std::size_t kHardwareTexts = 6;
 
@@ -55,7 +65,40 @@ class DynamixelHardware final : public Hardware {
     double gear_ratio = 1.0;       ///< servo revolutions per output revolution
     double zero_offset_rad = 0.0;  ///< output angle = servo angle / ratio - offset
     std::string name;              ///< "left wheel", "wheel 2", "steer 2"
+    // Read at activation.
+    std::uint16_t model = 0;
+    std::int32_t velocity_limit = 0;  ///< Velocity Limit (44), 0.229 rpm units
   };
+
+  /// The quickest bus exchange of a sliding window (between one and two blocks of block_s):
+  /// a lasting rise in latency (a busier host, a slower adapter) becomes the new floor within
+  /// two blocks, where an all-time minimum would leave every later reading untimed.
+  class ExchangeFloor {
+   public:
+    explicit ExchangeFloor(double block_s) noexcept : block_s_(block_s) {}
+    void add(double now_s, double exchange_s) noexcept;
+    [[nodiscard]] double value() const noexcept;
+
+   private:
+    double block_s_;
+    double block_start_s_ = -1e300;
+    double current_ = 1e300;
+    double previous_ = 1e300;
+  };
+  /// Block of ExchangeFloor in the bus thread: a lasting latency change is learnt in 0.5 s at
+  /// most; each block holds some 125 exchanges at the default 2 ms bus period.
+  static constexpr double kExchangeFloorBlockS = 0.25;
+  /// Start-up exchanges (ping, reads, writes of activate() and deactivate()) are tried this
+  /// often before one that gets no good status refuses.
+  static constexpr int kSetupAttempts = 3;
+
+  /// Off the loop. A warning when `port` (resolved through symbolic links) is a USB serial
+  /// adapter whose latency timer under `sysfs_root` (/sys/bus/usb-serial/devices/<tty>/
+  /// latency_timer) is above 1 ms: each reply then waits up to that long. "" otherwise.
+  static std::string latency_timer_warning(const std::string& port,
+                                           const std::string& sysfs_root = "/sys");
+  /// The X-series model with this model number ("XM430-W350"), or nullptr.
+  static const char* model_name(std::uint16_t model) noexcept;
 
   /// How much longer than the quickest exchange one may take with its sampling time still
   /// known: at the 20 rad/s wheel limit, 2 ms of timing error moves a wheel 0.04 rad, a third
@@ -73,6 +116,9 @@ class DynamixelHardware final : public Hardware {
     bool sample_time_known = true;
     std::array<std::int32_t, kMaxServos> position{};  ///< servo counts
     std::array<std::int32_t, kMaxServos> velocity{};  ///< 0.229 rpm units
+    /// CLOCK_MONOTONIC the servo sampled position[i] and velocity[i] (estimated): a servo
+    /// whose reply failed (bad CRC) keeps its last values and their time.
+    std::array<double, kMaxServos> servo_sample_s{};
     FaultKind fault = FaultKind::kNone;
     std::uint8_t fault_servo = 0;
     std::uint8_t hardware_error = 0;
@@ -112,11 +158,16 @@ class DynamixelHardware final : public Hardware {
   void bus_loop(Reading r) noexcept;  // starts from the activation reading
   // Off the loop: a failed step of activate()/deactivate() names the servo; false then.
   bool setup_servo(dynamixel::Bus& bus, std::size_t i);
+  // Off the loop: refuses (false, activate_error_ set) or warns about a configured maximum
+  // rate above a servo's Velocity Limit.
+  bool check_velocity_limits();
+  bool arm_watchdogs(dynamixel::Bus& bus);
+  void read_drivetrain_limits(const PluginContext& ctx);
   [[nodiscard]] std::int32_t wheel_goal(std::size_t i, double rate_radps) const noexcept;
   [[nodiscard]] std::int32_t steer_goal(std::size_t i, double angle_rad) const noexcept;
   [[nodiscard]] double output_angle(std::size_t i, std::int32_t counts) const noexcept;
-  // Output angle of servo `servo` (-1: none, 0) extrapolated `age_s` past its sample.
-  [[nodiscard]] double angle_at(std::int32_t servo, double age_s) const noexcept;
+  // Output angle of servo `servo` (-1: none, 0) extrapolated from its sample to `stamp_s`.
+  [[nodiscard]] double angle_at(std::int32_t servo, double stamp_s) const noexcept;
 
   // Configuration.
   std::string port_path_;
@@ -125,6 +176,14 @@ class DynamixelHardware final : public Hardware {
   double bus_period_s_ = 0.002;
   double stale_timeout_s_ = 0.05;
   std::uint32_t max_crc_errors_ = 3;
+  double bus_watchdog_s_ = 0.1;
+  std::uint8_t watchdog_units_ = 5;  // Bus Watchdog (98) value, 20 ms each; 0: off
+  bool clamp_to_velocity_limit_ = false;
+  // The drivetrain's configured maxima (from the daemon configuration), 0 when unknown, and
+  // the keys they came from, for messages.
+  double max_wheel_rate_radps_ = 0.0;
+  double max_steer_rate_radps_ = 0.0;
+  std::string max_wheel_rate_key_, max_steer_rate_key_;
   double loop_period_s_ = 0.001;
   std::uint32_t module_count_ = 0;
   std::vector<Servo> servos_;
@@ -133,7 +192,8 @@ class DynamixelHardware final : public Hardware {
   std::array<std::int32_t, kMaxModules> wheel_servo_{};  // module -> servo index, -1 none
   std::array<std::int32_t, kMaxModules> steer_servo_{};
   // Messages, built by configure(): [servo][kind] and [servo][hardware text].
-  std::vector<std::array<std::string, 6>> messages_;
+  std::vector<std::array<std::string, kFaultKinds>> messages_;
+  std::string port_message_;  // the port failed
   std::vector<std::array<std::string, kHardwareTexts>> hardware_messages_;
   std::string activate_error_;  // activate()/deactivate() failures (off the loop)
 
@@ -146,6 +206,7 @@ class DynamixelHardware final : public Hardware {
   rt::LatestValue<ActuatorCommand> commands_;          // loop -> bus thread
   rt::LatestValue<Reading> readings_;                  // bus thread -> loop
   std::array<double, kMaxModules> start_steer_rad_{};  // steering at activation
+  std::array<std::int32_t, kMaxServos> goal_limit_{};  // wheel goal bound, 0.229 rpm units
 
   // Loop side.
   Reading reading_{};  ///< the newest reading: its faults count

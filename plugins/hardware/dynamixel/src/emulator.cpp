@@ -41,18 +41,7 @@ void sleep_until(double t_s) {
 }  // namespace
 
 Emulator::Emulator(Options options) : options_(std::move(options)) {
-  termios raw{};
-  cfmakeraw(&raw);
-  char name[256] = {};
-  if (openpty(&master_, &slave_, name, &raw, nullptr) != 0) {
-    throw std::system_error(errno, std::generic_category(), "emulator: openpty");
-  }
-  port_ = name;
-  fcntl(master_, F_SETFL, fcntl(master_, F_GETFL) | O_NONBLOCK);
-  termios master_tio{};
-  tcgetattr(master_, &master_tio);
-  cfmakeraw(&master_tio);
-  tcsetattr(master_, TCSANOW, &master_tio);
+  const double now_s = monotonic_s();
   for (const std::uint8_t id : options_.ids) {
     if (id > kMaxId) throw std::invalid_argument("emulator: ID above 252");
     Servo& s = servos_[id];
@@ -61,16 +50,62 @@ Emulator::Emulator(Options options) : options_(std::move(options)) {
     s.table[6] = 45;  // firmware
     s.table[7] = id;
     s.table[address::kOperatingMode] = 3;  // position mode, the factory default
+    put(s.table, address::kVelocityLimit, kDefaultVelocityLimit);
+    put(s.table, address::kMaxPositionLimit, 4095);  // factory defaults: one whole turn
+    put(s.table, address::kMinPositionLimit, 0);
+    s.last_instruction_s = now_s;
   }
-  last_advance_s_ = monotonic_s();
+  open_pty();
+  last_advance_s_ = now_s;
   thread_ = std::thread([this] { serve(); });
 }
 
 Emulator::~Emulator() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
+  close_pty();
+}
+
+void Emulator::open_pty() {
+  termios raw{};
+  cfmakeraw(&raw);
+  char name[256] = {};
+  int master = -1;
+  int slave = -1;
+  if (openpty(&master, &slave, name, &raw, nullptr) != 0) {
+    throw std::system_error(errno, std::generic_category(), "emulator: openpty");
+  }
+  fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK);
+  termios master_tio{};
+  tcgetattr(master, &master_tio);
+  cfmakeraw(&master_tio);
+  tcsetattr(master, TCSANOW, &master_tio);
+  std::lock_guard lock(mutex_);
+  master_ = master;
+  slave_ = slave;
+  port_ = name;
+}
+
+void Emulator::close_pty() noexcept {
   if (master_ >= 0) ::close(master_);
   if (slave_ >= 0) ::close(slave_);
+  master_ = -1;
+  slave_ = -1;
+}
+
+std::string Emulator::port() const {
+  std::lock_guard lock(mutex_);
+  return port_;
+}
+
+void Emulator::disconnect() {
+  port_request_.store(PortRequest::kDisconnect);
+  while (port_request_.load() != PortRequest::kNone) usleep(500);
+}
+
+void Emulator::reconnect() {
+  port_request_.store(PortRequest::kReconnect);
+  while (port_request_.load() != PortRequest::kNone) usleep(500);
 }
 
 Emulator::Servo* Emulator::find(std::uint8_t id) {
@@ -102,6 +137,25 @@ void Emulator::set_hardware_error(std::uint8_t id, std::uint8_t bits) {
 void Emulator::set_reply_delay(std::uint8_t id, double delay_s) {
   std::lock_guard lock(mutex_);
   servos_.at(id).reply_delay_s = delay_s;
+}
+void Emulator::drop_replies(std::uint8_t id, int count) {
+  std::lock_guard lock(mutex_);
+  servos_.at(id).drop_replies = count;
+}
+void Emulator::set_velocity_limit(std::uint8_t id, std::int32_t units) {
+  std::lock_guard lock(mutex_);
+  put(servos_.at(id).table, address::kVelocityLimit, units);
+}
+void Emulator::set_position_limits(std::uint8_t id, std::int32_t min_counts,
+                                   std::int32_t max_counts) {
+  std::lock_guard lock(mutex_);
+  Servo& s = servos_.at(id);
+  put(s.table, address::kMinPositionLimit, min_counts);
+  put(s.table, address::kMaxPositionLimit, max_counts);
+}
+void Emulator::set_operating_mode(std::uint8_t id, std::uint8_t mode) {
+  std::lock_guard lock(mutex_);
+  servos_.at(id).table[address::kOperatingMode] = mode;
 }
 void Emulator::set_present_position(std::uint8_t id, std::int32_t counts) {
   std::lock_guard lock(mutex_);
@@ -135,6 +189,38 @@ std::int32_t Emulator::present_position(std::uint8_t id) const {
   return get(at(id).table, address::kPresentPosition);
 }
 
+std::int32_t Emulator::present_velocity(std::uint8_t id) {
+  std::lock_guard lock(mutex_);
+  advance(monotonic_s());
+  return get(at(id).table, address::kPresentVelocity);
+}
+std::uint8_t Emulator::bus_watchdog(std::uint8_t id) const {
+  std::lock_guard lock(mutex_);
+  return at(id).table[address::kBusWatchdog];
+}
+std::vector<Emulator::WatchdogExpiry> Emulator::watchdog_expiries() const {
+  std::lock_guard lock(mutex_);
+  return watchdog_expiries_;
+}
+int Emulator::eeprom_writes(std::uint8_t id) const {
+  std::lock_guard lock(mutex_);
+  return at(id).eeprom_writes;
+}
+
+// e-Manual, "Bus Watchdog(98)": armed (1-127, unit 20 ms) and the torque on, no instruction
+// packet for longer than that stops the servo and sets the value to -1.
+void Emulator::check_watchdogs(double now_s) {
+  for (auto& [id, s] : servos_) {
+    const std::uint8_t value = s.table[address::kBusWatchdog];
+    if (value == 0 || value > kBusWatchdogMax || s.table[address::kTorqueEnable] == 0) continue;
+    const double expires_s = s.last_instruction_s + value * kBusWatchdogUnitS;
+    if (now_s < expires_s) continue;
+    advance(expires_s);  // it ran until then
+    s.table[address::kBusWatchdog] = kBusWatchdogExpired;
+    watchdog_expiries_.push_back({id, expires_s});
+  }
+}
+
 // Motors move under their goals from the last advance to `now_s`.
 void Emulator::advance(double now_s) {
   if (now_s <= last_advance_s_) return;
@@ -143,7 +229,9 @@ void Emulator::advance(double now_s) {
   constexpr double kCountsPerUnitS = kVelocityUnitRpm / 60.0 * kPositionCountsPerRev;
   for (auto& [id, s] : servos_) {
     double rate_counts_s = 0.0;
-    if (s.table[address::kTorqueEnable] != 0) {
+    // A servo whose bus watchdog expired stands (Profile Acceleration and Velocity as 0).
+    if (s.table[address::kTorqueEnable] != 0 &&
+        s.table[address::kBusWatchdog] != kBusWatchdogExpired) {
       if (s.table[address::kOperatingMode] == operating_mode::kVelocity) {
         rate_counts_s = get(s.table, address::kGoalVelocity) * kCountsPerUnitS;
       } else if (s.table[address::kOperatingMode] == operating_mode::kExtendedPosition &&
@@ -175,8 +263,38 @@ void Emulator::serve() noexcept {
   std::array<std::uint8_t, 512> buffer{};
   std::size_t packet_bytes = 0;
   while (!stop_.load()) {
+    const PortRequest request = port_request_.load();
+    if (request != PortRequest::kNone) {
+      if (request == PortRequest::kDisconnect) {
+        std::lock_guard lock(mutex_);
+        close_pty();
+      } else if (master_ < 0) {
+        try {
+          open_pty();
+        } catch (const std::system_error&) {
+          // No pty to be had: stays unplugged.
+        }
+      }
+      parser.reset();
+      packet_bytes = 0;
+      port_request_.store(PortRequest::kNone);
+    }
+    if (master_ < 0) {
+      usleep(1000);
+      std::lock_guard lock(mutex_);
+      check_watchdogs(monotonic_s());
+      continue;
+    }
+    // A short poll: the watchdogs are checked while the bus is quiet, to within 2 ms. Not
+    // with input pending: a packet that waited for this thread (a loaded test machine) was
+    // on the wire in time.
     pollfd p{master_, POLLIN, 0};
-    if (poll(&p, 1, 10) <= 0) continue;
+    const int ready = poll(&p, 1, 2);
+    if (ready == 0) {
+      std::lock_guard lock(mutex_);
+      check_watchdogs(monotonic_s());
+    }
+    if (ready <= 0) continue;
     const ssize_t n = ::read(master_, buffer.data(), buffer.size());
     if (n <= 0) {
       if (n < 0 && errno != EAGAIN && errno != EINTR && errno != EIO) return;
@@ -214,6 +332,10 @@ void Emulator::serve() noexcept {
 void Emulator::reply(std::uint8_t id, Servo& servo, std::uint8_t error, const std::uint8_t* data,
                      std::size_t size, std::size_t request_bytes, double received_s) {
   if (servo.silent) return;
+  if (servo.drop_replies > 0) {
+    --servo.drop_replies;
+    return;
+  }
   if (servo.table[address::kHardwareErrorStatus] != 0) error |= kAlertBit;
   PacketBuilder b(id, Instruction::kStatus);
   b.u8(error).bytes({data, size});
@@ -234,7 +356,7 @@ void Emulator::reply(std::uint8_t id, Servo& servo, std::uint8_t error, const st
   mutex_.unlock();  // callers hold it; let observers in while waiting
   if (send_at > monotonic_s()) sleep_until(send_at);
   std::size_t done = 0;
-  while (done < wire.size()) {
+  while (master_ >= 0 && done < wire.size()) {
     const ssize_t n = ::write(master_, out.data() + done, wire.size() - done);
     if (n > 0) {
       done += static_cast<std::size_t>(n);
@@ -260,8 +382,31 @@ void Emulator::write_table(std::uint8_t id, Servo& s, std::uint16_t address,
     error = static_cast<std::uint8_t>(ErrorNumber::kAccessError);
     return;
   }
-  const bool torque = address <= address::kTorqueEnable && address::kTorqueEnable < address + size;
-  if (torque) {
+  auto covers = [&](std::uint16_t at) { return address <= at && at < address + size; };
+  if (covers(address::kBusWatchdog)) {
+    const std::uint8_t value = data[address::kBusWatchdog - address];
+    if (value > kBusWatchdogMax) {  // 0 ~ 127 may be written
+      error = static_cast<std::uint8_t>(ErrorNumber::kDataRangeError);
+      return;
+    }
+  }
+  // Goal values are read-only after the watchdog expired (e-Manual, "Bus Watchdog(98)").
+  if (s.table[address::kBusWatchdog] == kBusWatchdogExpired && address < 120 &&
+      address + size > 100 && !covers(address::kBusWatchdog)) {
+    error = static_cast<std::uint8_t>(ErrorNumber::kDataRangeError);
+    return;
+  }
+  // Goal Velocity within +-Velocity Limit (e-Manual, "Goal Velocity(104)").
+  if (address <= address::kGoalVelocity && address::kGoalVelocity + 4 <= address + size) {
+    const std::int32_t goal =
+        get_i32({data, size}, static_cast<std::size_t>(address::kGoalVelocity - address));
+    const std::int32_t limit = get(s.table, address::kVelocityLimit);
+    if (goal > limit || goal < -limit) {
+      error = static_cast<std::uint8_t>(ErrorNumber::kDataLimitError);
+      return;
+    }
+  }
+  if (covers(address::kTorqueEnable)) {
     const std::uint8_t value = data[address::kTorqueEnable - address];
     torque_writes_.push_back({id, value, now_s});
     // A servo in hardware error keeps its torque off.
@@ -270,6 +415,7 @@ void Emulator::write_table(std::uint8_t id, Servo& s, std::uint16_t address,
       return;
     }
   }
+  if (address < 64) ++s.eeprom_writes;
   // Goal Position in extended mode: the motor starts from where it is.
   std::memcpy(&s.table[address], data, size);
 }
@@ -277,6 +423,10 @@ void Emulator::write_table(std::uint8_t id, Servo& s, std::uint16_t address,
 void Emulator::handle(const Packet& request, std::size_t request_bytes, double received_s) {
   std::lock_guard lock(mutex_);
   advance(received_s);
+  // Every instruction packet to a servo's ID or to all of them feeds its watchdog.
+  for (auto& [id, s] : servos_) {
+    if (request.id == id || request.id == kBroadcastId) s.last_instruction_s = received_s;
+  }
   const std::span<const std::uint8_t> params(request.params.data(), request.param_count);
   const auto instruction = static_cast<Instruction>(request.instruction);
   switch (instruction) {

@@ -13,6 +13,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 
@@ -21,6 +23,7 @@
 #include "swivel/config/config_error.hpp"
 #include "swivel/dynamixel/bus.hpp"
 #include "swivel/dynamixel/emulator.hpp"
+#include "swivel/dynamixel/serial_port.hpp"
 
 namespace dxl = swivel::dynamixel;
 using swivel::ActuatorCommand;
@@ -442,4 +445,381 @@ TEST(DynamixelHardware, ReadAndWriteDoNotTouchTheHeap) {
   EXPECT_EQ(counts.deallocations, 0U);
   emulator.set_silent(1, false);
   hw.deactivate();
+}
+
+namespace {
+
+// The left wheel's angle from the plugin at `now` against the emulated servo's own position
+// at the same instant (ID 1: direction 1, ratio 1).
+double left_angle_error(DynamixelHardware& hw, dxl::Emulator& emulator, HardwareState& s,
+                        Status& status) {
+  const double now = swivel::monotonic_s();
+  status = hw.read(now, s);
+  (void)emulator.present_velocity(1);  // advances the emulated motors to now
+  const double truth = emulator.present_position(1) * 2.0 * kPi / 4096.0;
+  return s.wheel_angle_rad[0] - truth;
+}
+
+std::string temp_dir(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "dxl_" + name + "_" + std::to_string(getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// A daemon configuration file holding the drivetrain section the plugin compares the servos'
+// Velocity Limit with.
+std::string drivetrain_file(const std::string& dir, const std::string& drivetrain_yaml) {
+  const std::string path = dir + "/swiveld.yaml";
+  std::ofstream(path) << "drivetrain: " << drivetrain_yaml << "\n";
+  return path;
+}
+
+void configure_from(DynamixelHardware& hw, const RobotModel& model, const std::string& yaml,
+                    const std::string& config_file) {
+  PluginContext ctx;
+  ctx.params = YAML::Load(yaml);
+  ctx.config_file = config_file;
+  ctx.params_path = "hardware.params";
+  ctx.robot = &model;
+  ctx.period_s = 0.001;
+  hw.configure(ctx);
+}
+
+}  // namespace
+
+TEST(DynamixelHardware, BusWatchdogIsArmedFedAndDisarmed) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model,
+            diff_params(emulator.port(), ", reply_timeout_s: 0.02, bus_watchdog_s: 0.1"));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.bus_watchdog(1), 5);  // 5 x 20 ms
+  EXPECT_EQ(emulator.bus_watchdog(2), 5);
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.5, s), Status::kOk) << hw.last_error();
+  EXPECT_TRUE(emulator.watchdog_expiries().empty()) << "the bus cycles feed it";
+  ASSERT_EQ(hw.deactivate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.bus_watchdog(1), 0);
+  EXPECT_EQ(emulator.bus_watchdog(2), 0);
+}
+
+TEST(DynamixelHardware, RefusesAWatchdogShorterThanAFewBusPeriods) {
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  try {
+    configure(hw, model,
+              diff_params("/dev/null",
+                          ", reply_timeout_s: 0.005, bus_period_s: 0.01, bus_watchdog_s: 0.02"));
+    ADD_FAILURE() << "accepted a watchdog of two bus periods";
+  } catch (const swivel::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("bus_watchdog_s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("3 bus periods"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(0.03 s here)"), std::string::npos) << e.what();
+  }
+  // Nor one a cycle waiting for a missing status outlasts (the healthy servos would stop).
+  EXPECT_THROW(
+      configure(hw, model, diff_params("/dev/null", ", reply_timeout_s: 0.2, bus_watchdog_s: 0.3")),
+      swivel::ConfigError);
+  EXPECT_THROW(configure(hw, model, diff_params("/dev/null", ", bus_watchdog_s: 3.0")),
+               swivel::ConfigError);  // above 127 x 20 ms
+  EXPECT_NO_THROW(configure(hw, model, diff_params("/dev/null", ", bus_watchdog_s: 0")));
+}
+
+// A servo left with an expired watchdog (the daemon died) refuses goals until 0 is written
+// to it: activation clears it, and the robot drives again.
+TEST(DynamixelHardware, ActivationClearsAnExpiredWatchdog) {
+  dxl::Emulator emulator(ids({1, 2}));
+  {
+    dxl::SerialPort port;
+    port.open(emulator.port(), 1000000);
+    dxl::Bus bus(port);
+    std::uint8_t error = 0;
+    const std::uint8_t velocity_mode[] = {dxl::operating_mode::kVelocity};
+    const std::uint8_t on[] = {1};
+    const std::uint8_t one_unit[] = {1};  // 20 ms
+    ASSERT_EQ(bus.write(1, dxl::address::kOperatingMode, velocity_mode, 0.2, error),
+              dxl::BusResult::kOk);
+    ASSERT_EQ(bus.write(1, dxl::address::kTorqueEnable, on, 0.2, error), dxl::BusResult::kOk);
+    ASSERT_EQ(bus.write(1, dxl::address::kBusWatchdog, one_unit, 0.2, error), dxl::BusResult::kOk);
+    const double start = swivel::monotonic_s();
+    while (emulator.bus_watchdog(1) != dxl::kBusWatchdogExpired &&
+           swivel::monotonic_s() - start < 2.0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_EQ(emulator.bus_watchdog(1), dxl::kBusWatchdogExpired);
+  }
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(2.0, 2.0), 0.2, s), Status::kOk) << hw.last_error();
+  EXPECT_GT(emulator.goal_velocity(1), 0) << "goals still read-only";
+  EXPECT_NE(emulator.present_velocity(1), 0);
+  hw.deactivate();
+}
+
+// An unplugged USB adapter: a port fault naming the port; a clear (activate()) is refused
+// with the port and the cause while it is away, and once it is back (a udev symbolic link
+// to the new device) closes the dead descriptor, reopens and drives again.
+TEST(DynamixelHardware, AnUnpluggedAdapterIsAPortFaultAndAClearReopensIt) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const std::string dir = temp_dir("unplug");
+  const std::string link = dir + "/ttyDXL";
+  std::filesystem::create_symlink(emulator.port(), link);
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(link));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk) << hw.last_error();
+
+  emulator.disconnect();
+  std::filesystem::remove(link);  // udev removes the link with the device
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
+  EXPECT_EQ(std::string(hw.last_error()), "dynamixel: port lost: " + link);
+  hw.on_error(hw.last_error());
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_NE(std::string(hw.last_error()).find(link + ": cannot open"), std::string::npos)
+      << hw.last_error();
+
+  emulator.reconnect();
+  std::filesystem::create_symlink(emulator.port(), link);
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.2, s), Status::kOk) << hw.last_error();
+  EXPECT_GT(emulator.goal_velocity(1), 0) << "the new port receives the goals";
+  EXPECT_EQ(emulator.torque_enable(1), 1);
+  ASSERT_EQ(hw.deactivate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.torque_enable(1), 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DynamixelHardware, DeactivateOnALostPortSaysTheTorqueOffIsNotConfirmed) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  const std::string port = emulator.port();
+  configure(hw, model, diff_params(port));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  emulator.disconnect();
+  EXPECT_EQ(hw.deactivate(), Status::kError);
+  EXPECT_EQ(std::string(hw.last_error()),
+            "dynamixel: " + port + ": port error: torque off not confirmed");
+}
+
+// The quickest exchange is learnt again after a lasting rise in latency (3 ms more per
+// reply): readings get a known sampling time again and the angles keep following the
+// servos through changes of direction, with stale_timeout_s as long as 0.5 s.
+TEST(DynamixelHardware, AnglesFollowTheServosAfterALastingLatencyRise) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  PluginContext ctx;
+  ctx.params = YAML::Load("{port: " + emulator.port() +
+                          ", reply_timeout_s: 0.2, stale_timeout_s: 0.5, left: {id: 1}, "
+                          "right: {id: 2}}");
+  ctx.robot = &model;
+  ctx.period_s = 0.001;
+  hw.configure(ctx);
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(5.0, 5.0), 0.3, s), Status::kOk) << hw.last_error();
+  emulator.set_reply_delay(1, 0.003);
+  emulator.set_reply_delay(2, 0.003);
+  ASSERT_EQ(run(hw, wheels(5.0, 5.0), 0.7, s), Status::kOk) << hw.last_error();  // learning
+  double worst_rad = 0.0;
+  int timed = 0;
+  int readings = 0;
+  std::uint64_t last_cycle = hw.last_reading().cycle;
+  const double start = swivel::monotonic_s();
+  for (;;) {
+    const double now = swivel::monotonic_s();
+    if (now - start >= 1.2) break;
+    // Reverse every 0.2 s: an extrapolation from an old reading errs by 10 rad/s x its age.
+    const double rate = std::fmod(now - start, 0.4) < 0.2 ? 5.0 : -5.0;
+    Status status = Status::kOk;
+    const double error = left_angle_error(hw, emulator, s, status);
+    ASSERT_EQ(status, Status::kOk) << hw.last_error();
+    ASSERT_EQ(hw.write(wheels(rate, rate)), Status::kOk);
+    worst_rad = std::max(worst_rad, std::abs(error));
+    if (hw.last_reading().cycle != last_cycle) {
+      last_cycle = hw.last_reading().cycle;
+      ++readings;
+      if (hw.last_reading().sample_time_known) ++timed;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  // Off by the extra delay times the rate (0.015 rad) and one bus cycle at a reversal.
+  EXPECT_LT(worst_rad, 0.15);
+  EXPECT_GT(timed, readings / 2) << "readings with a known sampling time: " << timed << " of "
+                                 << readings;
+  hw.deactivate();
+}
+
+// A status with a bad CRC carries nothing: that servo's last position keeps its own time, so
+// the angle stays on the servo's path instead of lagging by rate x the bad replies' span.
+TEST(DynamixelHardware, BadCrcRepliesChangeNeitherPositionNorItsTime) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port(), ", max_crc_errors: 1000"));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(5.0, 5.0), 0.3, s), Status::kOk) << hw.last_error();
+  double worst_rad = 0.0;
+  const double start = swivel::monotonic_s();
+  bool corrupt = false;
+  bool restored = false;
+  for (;;) {
+    const double now = swivel::monotonic_s();
+    if (now - start >= 0.5) break;
+    if (!corrupt && now - start > 0.1) corrupt = (emulator.set_corrupt_crc(1, true), true);
+    // 80 ms of bad replies: 0.4 rad of lag at 5 rad/s had they taken the new time.
+    if (!restored && now - start > 0.18) restored = (emulator.set_corrupt_crc(1, false), true);
+    Status status = Status::kOk;
+    const double error = left_angle_error(hw, emulator, s, status);
+    ASSERT_EQ(status, Status::kOk) << hw.last_error();
+    ASSERT_EQ(hw.write(wheels(5.0, 5.0)), Status::kOk);
+    worst_rad = std::max(worst_rad, std::abs(error));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_GT(hw.last_reading().crc_errors, 5U);
+  EXPECT_LT(worst_rad, 0.1);
+  hw.deactivate();
+}
+
+TEST(DynamixelHardware, RefusesAVelocityLimitBelowTheDrivetrainsMaximum) {
+  dxl::Emulator emulator(ids({1, 2}));
+  emulator.set_velocity_limit(2, 100);  // 22.9 rpm: 2.40 rad/s, 1.20 at the wheel (2:1)
+  const std::string dir = temp_dir("velocity_limit");
+  const std::string file =
+      drivetrain_file(dir, "{plugin: differential, params: {max_wheel_rate_radps: 5.0}}");
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure_from(hw, model, diff_params(emulator.port()), file);
+  EXPECT_EQ(hw.activate(), Status::kError);
+  const std::string message = hw.last_error();
+  EXPECT_NE(message.find("dynamixel ID 2 (right wheel): Velocity Limit 100 (1.20 rad/s at the "
+                         "wheel) is below " +
+                         file + ": drivetrain.params.max_wheel_rate_radps = 5 rad/s"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(emulator.torque_enable(2), 0);
+
+  // The drivetrain's default (20 rad/s for differential) counts when the key is absent.
+  const std::string defaulted = drivetrain_file(dir, "{plugin: differential}");
+  configure_from(hw, model, diff_params(emulator.port()), defaulted);
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_NE(std::string(hw.last_error()).find("max_wheel_rate_radps (its default) = 20"),
+            std::string::npos)
+      << hw.last_error();
+  std::filesystem::remove_all(dir);
+}
+
+// Clamped where the configuration says so: the servo gets its limit, not a goal it would
+// ignore (which left it turning at the old goal).
+TEST(DynamixelHardware, ClampsWheelGoalsToTheVelocityLimitWhenConfigured) {
+  dxl::Emulator emulator(ids({1, 2}));
+  emulator.set_velocity_limit(1, 100);
+  const std::string dir = temp_dir("velocity_clamp");
+  const std::string file =
+      drivetrain_file(dir, "{plugin: differential, params: {max_wheel_rate_radps: 5.0}}");
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure_from(hw, model, diff_params(emulator.port(), ", over_velocity_limit: clamp"), file);
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(4.0, 1.0), 0.2, s), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.goal_velocity(1), 100);
+  EXPECT_EQ(emulator.goal_velocity(2), -std::lround(1.0 * 60.0 / (2.0 * kPi) / 0.229 * 2.0));
+  hw.deactivate();
+
+  // Without the clamp, a goal beyond the limit (no drivetrain maximum to check at start) is
+  // a fault naming the servo, and the wheels stop.
+  DynamixelHardware strict;
+  configure(strict, model, diff_params(emulator.port()));
+  ASSERT_EQ(strict.activate(), Status::kOk) << strict.last_error();
+  ASSERT_EQ(run(strict, wheels(4.0, 1.0), 3.0, s), Status::kError);
+  EXPECT_STREQ(strict.last_error(), "dynamixel ID 1 (left wheel): goal above Velocity Limit");
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  EXPECT_EQ(emulator.goal_velocity(1), 0);
+  strict.deactivate();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DynamixelHardware, RefusesAServoThatIsNotXSeries) {
+  dxl::Emulator::Options options = ids({1, 2});
+  options.model_number = 350;  // XL-320: another control table
+  dxl::Emulator emulator(options);
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_STREQ(hw.last_error(),
+               "dynamixel ID 1 (left wheel): model number 350 is not an X-series servo (the "
+               "control table this plugin uses)");
+  EXPECT_STREQ(DynamixelHardware::model_name(1020), "XM430-W350");
+  EXPECT_STREQ(DynamixelHardware::model_name(1060), "XL430-W250");
+}
+
+TEST(DynamixelHardware, StartUpRidesOutLostStatusPackets) {
+  dxl::Emulator emulator(ids({1, 2}));
+  emulator.drop_replies(2, 2);  // the ping and its first retry go unanswered
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.torque_enable(2), 1);
+  hw.deactivate();
+  emulator.drop_replies(1, DynamixelHardware::kSetupAttempts);  // a ping never answered
+  EXPECT_EQ(hw.activate(), Status::kError);
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 1 (left wheel): does not answer a ping");
+}
+
+TEST(DynamixelHardware, OperatingModeIsWrittenOnlyWhenItDiffers) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  for (int clear = 0; clear < 3; ++clear) {
+    ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+    ASSERT_EQ(hw.deactivate(), Status::kOk) << hw.last_error();
+  }
+  EXPECT_EQ(emulator.operating_mode(1), dxl::operating_mode::kVelocity);
+  EXPECT_EQ(emulator.eeprom_writes(1), 1) << "position mode (factory) to velocity, once";
+  EXPECT_EQ(emulator.eeprom_writes(2), 1);
+}
+
+TEST(DynamixelHardware, WarnsAboutAnAdapterLatencyTimerAboveOneMillisecond) {
+  const std::string dir = temp_dir("latency_timer");
+  std::filesystem::create_directories(dir + "/dev");
+  std::ofstream(dir + "/dev/ttyUSB7") << "";
+  std::filesystem::create_symlink(dir + "/dev/ttyUSB7", dir + "/dev/swivel-dxl");
+  const std::string timer_dir = dir + "/sys/bus/usb-serial/devices/ttyUSB7";
+  std::filesystem::create_directories(timer_dir);
+  std::ofstream(timer_dir + "/latency_timer") << "16\n";
+  const std::string warning =
+      DynamixelHardware::latency_timer_warning(dir + "/dev/swivel-dxl", dir + "/sys");
+  EXPECT_NE(warning.find("latency timer is 16 ms"), std::string::npos) << warning;
+  EXPECT_NE(warning.find(dir + "/dev/swivel-dxl"), std::string::npos) << warning;
+  std::ofstream(timer_dir + "/latency_timer") << "1\n";
+  EXPECT_EQ(DynamixelHardware::latency_timer_warning(dir + "/dev/swivel-dxl", dir + "/sys"), "");
+  // Not a USB serial adapter (a pty, a native UART): nothing to say.
+  EXPECT_EQ(DynamixelHardware::latency_timer_warning("/dev/null", dir + "/sys"), "");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DynamixelHardware, ExchangeFloorForgetsAnOldQuickestExchange) {
+  DynamixelHardware::ExchangeFloor floor(0.25);
+  for (int i = 0; i < 100; ++i) floor.add(0.01 * i, 0.001);  // 1 s at 1 ms
+  EXPECT_DOUBLE_EQ(floor.value(), 0.001);
+  // Blocks of 0.25 s from 0: the 1 ms of the block before 1.0 s is remembered until 1.25 s.
+  for (int i = 100; i < 120; ++i) floor.add(0.01 * i, 0.004);  // 4 ms from 1.0 s on
+  EXPECT_DOUBLE_EQ(floor.value(), 0.001) << "within a block of the change the old floor holds";
+  for (int i = 120; i < 160; ++i) floor.add(0.01 * i, 0.004);
+  EXPECT_DOUBLE_EQ(floor.value(), 0.004) << "two blocks on the new latency is the floor";
+  floor.add(1.6, 0.002);
+  EXPECT_DOUBLE_EQ(floor.value(), 0.002) << "a quicker one counts at once";
 }

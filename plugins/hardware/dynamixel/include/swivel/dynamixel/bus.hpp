@@ -35,7 +35,9 @@ class Bus {
  public:
   explicit Bus(SerialPort& port) noexcept : port_(port) {}
 
-  BusResult ping(std::uint8_t id, double timeout_s, std::uint8_t& error) noexcept;
+  /// `model` (when given) receives the model number the status carries.
+  BusResult ping(std::uint8_t id, double timeout_s, std::uint8_t& error,
+                 std::uint16_t* model = nullptr) noexcept;
   /// Reads `out.size()` bytes from `address`.
   BusResult read(std::uint8_t id, std::uint16_t address, std::span<std::uint8_t> out,
                  double timeout_s, std::uint8_t& error) noexcept;

@@ -29,11 +29,18 @@ enum class Instruction : std::uint8_t {
   kStatus = 0x55,
 };
 
-/// X-series control table addresses used here (RAM area unless noted).
+/// X-series control table addresses used here (RAM area unless noted), from the ROBOTIS
+/// e-Manual's control tables (XM430-W350, XL430-W250: "Control Table of EEPROM Area", "...
+/// of RAM Area").
 namespace address {
+inline constexpr std::uint16_t kModelNumber = 0;           ///< EEPROM, 2 bytes, read-only
 inline constexpr std::uint16_t kOperatingMode = 11;        ///< EEPROM, 1 byte
+inline constexpr std::uint16_t kVelocityLimit = 44;        ///< EEPROM, 4 bytes, 0.229 rpm
+inline constexpr std::uint16_t kMaxPositionLimit = 48;     ///< EEPROM, 4 bytes, single turn
+inline constexpr std::uint16_t kMinPositionLimit = 52;     ///< EEPROM, 4 bytes, single turn
 inline constexpr std::uint16_t kTorqueEnable = 64;         ///< 1 byte
 inline constexpr std::uint16_t kHardwareErrorStatus = 70;  ///< 1 byte
+inline constexpr std::uint16_t kBusWatchdog = 98;          ///< 1 byte, unit 20 ms
 inline constexpr std::uint16_t kGoalVelocity = 104;        ///< 4 bytes, 0.229 rpm units
 inline constexpr std::uint16_t kGoalPosition = 116;        ///< 4 bytes, 4096 per revolution
 inline constexpr std::uint16_t kPresentVelocity = 128;     ///< 4 bytes
@@ -46,6 +53,13 @@ inline constexpr std::uint8_t kExtendedPosition = 4;
 }  // namespace operating_mode
 
 inline constexpr double kVelocityUnitRpm = 0.229;
+
+/// Bus Watchdog (98), e-Manual "Bus Watchdog(98)": 0 disables it (and clears its error),
+/// 1-127 arm it in units of 20 ms; it reads -1 (0xFF) once it expired: the servo stopped and
+/// its goal values are read-only until 0 is written.
+inline constexpr double kBusWatchdogUnitS = 0.020;
+inline constexpr std::uint8_t kBusWatchdogMax = 127;
+inline constexpr std::uint8_t kBusWatchdogExpired = 0xFF;
 inline constexpr double kPositionCountsPerRev = 4096.0;
 
 /// Status error byte: bit 7 alert (see Hardware Error Status), bits 0-6 the error number.
