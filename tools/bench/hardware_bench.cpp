@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -51,13 +53,39 @@ double percentile(const std::vector<double>& v, double q) {
   return v.empty() ? 0.0 : stats::quantile(v, q);
 }
 
+// The Bus Watchdog every servo has armed while measured, as the plugin arms it (its default).
+constexpr double kWatchdogS = 0.1;
+
 // The plugin's cycle, back to back: Sync Write of the goals (the wheel servos' velocities and,
 // with steering, the steering servos' positions), Sync Read of velocity and position.
 struct BusFigures {
   std::vector<double> cycle_us;
   double cycles_per_s = 0.0;
   std::uint64_t failures = 0;
+  std::size_t watchdog_expiries = 0;
+  bool armed = false;
 };
+
+// Torque on and the Bus Watchdog armed on each servo, as the plugin's activation leaves them
+// (velocity mode, still goals). False when a servo refused.
+bool arm(dxl::Bus& bus, const std::vector<std::uint8_t>& ids) {
+  const std::uint8_t mode[] = {dxl::operating_mode::kVelocity};
+  const std::uint8_t on[] = {1};
+  const std::uint8_t units[] = {
+      static_cast<std::uint8_t>(std::lround(kWatchdogS / dxl::kBusWatchdogUnitS))};
+  for (const std::uint8_t id : ids) {
+    std::uint8_t error = 0;
+    for (const auto& [address, value] :
+         {std::pair{dxl::address::kOperatingMode, std::span<const std::uint8_t>(mode)},
+          std::pair{dxl::address::kTorqueEnable, std::span<const std::uint8_t>(on)},
+          std::pair{dxl::address::kBusWatchdog, std::span<const std::uint8_t>(units)}}) {
+      if (bus.write(id, address, value, 0.1, error) != dxl::BusResult::kOk || error != 0) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
 
 BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   const double seconds = s.seconds;
@@ -74,6 +102,7 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
   std::vector<std::uint8_t> goals(4 * ids.size(), 0);
   std::vector<dxl::SyncReply> replies(ids.size());
   BusFigures f;
+  f.armed = arm(bus, ids);
   const double start = monotonic_s();
   double now = start;
   while (now - start < seconds) {
@@ -91,6 +120,7 @@ BusFigures measure_bus(const Case& c, const HardwareSettings& s) {
     f.cycle_us.push_back((now - t0) * 1e6);
   }
   f.cycles_per_s = static_cast<double>(f.cycle_us.size()) / (now - start);
+  f.watchdog_expiries = emulator.watchdog_expiries().size();
   return f;
 }
 
@@ -137,7 +167,8 @@ bool loop_lateness(const HardwareSettings& s, const Case& c, rt::TimingReport& r
   std::filesystem::create_directories(dir);
   const bool differential = c.servos == 2;
   std::string params = "{port: " + emulator.port() + ", baud: " + std::to_string(c.baud) +
-                       ", bus_period_s: 0, reply_timeout_s: 0.05, stale_timeout_s: 0.5, ";
+                       ", bus_period_s: 0, reply_timeout_s: 0.05, stale_timeout_s: 0.5, " +
+                       "bus_watchdog_s: " + std::to_string(kWatchdogS) + ", ";
   if (differential) {
     params += "left: {id: 1}, right: {id: 2}}";
   } else {
@@ -186,8 +217,9 @@ bool loop_lateness(const HardwareSettings& s, const Case& c, rt::TimingReport& r
     report = loop.timing();
     const StateSnapshot last = loop.latest();
     char text[160];
-    std::snprintf(text, sizeof text, "x=%.3f m, faults %llu (last %s)", last.estimate.pose.x_m,
-                  static_cast<unsigned long long>(last.fault_count), fault_code_name(last.fault));
+    std::snprintf(text, sizeof text, "x=%.3f m, faults %llu (last %s), watchdog expiries %zu",
+                  last.estimate.pose.x_m, static_cast<unsigned long long>(last.fault_count),
+                  fault_code_name(last.fault), emulator.watchdog_expiries().size());
     end_state = text;
   }
   (void)p.hw().deactivate();
@@ -202,12 +234,13 @@ int run_hardware(const HardwareSettings& s) {
   std::printf(
       "swivel-bench hardware: dynamixel plugin on servos emulated on a pty, the wire time of\n"
       "each byte emulated at the baud rate (10 bits per byte, Return Delay Time 0, no USB\n"
-      "adapter latency). %.1f s per measurement.\n\n",
-      s.seconds);
+      "adapter latency). %.1f s per measurement. Every servo's Bus Watchdog armed (%.2f s),\n"
+      "fed by the cycles as the plugin feeds it; an expiry would stop that servo.\n\n",
+      s.seconds, kWatchdogS);
   std::printf(
       "bus cycle = Sync Write of goals + Sync Read of velocity and position, back to back\n");
-  std::printf("  %-7s %-6s %8s %8s %8s %8s %10s %12s %9s\n", "servos", "Mbps", "wire", "p50", "p99",
-              "max", "cycles/s", "max rate p99", "failures");
+  std::printf("  %-7s %-6s %8s %8s %8s %8s %10s %12s %9s %9s\n", "servos", "Mbps", "wire", "p50",
+              "p99", "max", "cycles/s", "max rate p99", "failures", "wd exp");
   for (const Case& c : cases) {
     BusFigures f;
     // On a thread of its own, at the loop's priority (where permitted), like a bus thread.
@@ -217,12 +250,16 @@ int run_hardware(const HardwareSettings& s) {
     });
     thread.join();
     const double p99 = percentile(f.cycle_us, 0.99);
-    std::printf("  %-7zu %-6.0f %7.0fus %7.0fus %7.0fus %7.0fus %10.0f %10.0f Hz %9llu\n", c.servos,
-                c.baud / 1e6, wire_us(c), percentile(f.cycle_us, 0.5), p99,
+    char expiries[16];
+    std::snprintf(expiries, sizeof expiries, "%zu", f.watchdog_expiries);
+    std::printf("  %-7zu %-6.0f %7.0fus %7.0fus %7.0fus %7.0fus %10.0f %10.0f Hz %9llu %9s\n",
+                c.servos, c.baud / 1e6, wire_us(c), percentile(f.cycle_us, 0.5), p99,
                 percentile(f.cycle_us, 1.0), f.cycles_per_s, p99 > 0 ? 1e6 / p99 : 0.0,
-                static_cast<unsigned long long>(f.failures));
+                static_cast<unsigned long long>(f.failures), f.armed ? expiries : "not armed");
   }
-  std::printf("  (max rate p99: the loop rate at which 99%% of cycles get a fresh reading)\n\n");
+  std::printf(
+      "  (max rate p99: the loop rate at which 99%% of cycles get a fresh reading; wd exp: "
+      "servos whose watchdog expired)\n\n");
 
   rt::CpuDmaLatencyRequest dma;
   if (s.realtime) {

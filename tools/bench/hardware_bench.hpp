@@ -4,7 +4,8 @@
 // and 8 (the four-module SWPC robot) at 1 and 4 Mbps: the bus round trip of one cycle
 // (Sync Write of goals + Sync Read of present values) with the wire time emulated, the
 // highest loop rate at which every cycle can have a fresh reading, and the loop's lateness
-// with the plugin loaded like the daemon loads it, against the bare-sleep floor.
+// with the plugin loaded like the daemon loads it, against the bare-sleep floor; each with
+// every servo's Bus Watchdog armed (0.1 s) and its expiries counted.
 
 #include <string>
 
