@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "swivel/model_gap/fold_effects.hpp"
 #include "swivel/model_gap/workflow.hpp"
 #include "swivel/robot_model_io.hpp"
 
@@ -100,6 +101,10 @@ json report_json(const GapResult& r) {
   for (const auto& e : effects_json(r.command.named, Question::kCommandToMotion))
     named.push_back(e);
   j["named_effects"] = named;
+  {
+    const FoldResult fold = fold_effects(r.augmented);
+    j["model_augmented"] = {{"folded", fold.folded}, {"kept_in_effects", fold.kept}};
+  }
   j["questions"] = json::array({question_json(r.sensor)});
   if (r.command_assessed) j["questions"].push_back(question_json(r.command));
   j["command_delay_s"] = r.command_delay_s;
@@ -298,8 +303,15 @@ std::string markdown(const GapResult& r, bool plots) {
      << "| command to motion | "
      << (r.command_assessed ? verdict_name(r.command.verdict) : "not assessed") << " |\n\n";
   if (!r.named().empty()) {
-    md << "The augmented model is `model_augmented.yaml`: the nominal model with the named effects "
-          "(limits go to its `limits:` section).\n\n";
+    // What the daemon loads (fold_effects.hpp): the header of model_augmented.yaml says it too.
+    const FoldResult fold = fold_effects(r.augmented);
+    md << "The augmented model is `model_augmented.yaml`: the nominal model with what was named "
+          "folded into the robot's own parameters, which the daemon's drivetrain and localization "
+          "use (fitted limits go to its `limits:` section); only what the daemon cannot use stays "
+          "in `effects:`, for the simulator.\n\n";
+    for (const std::string& line : fold.folded) md << "- folded: " << line << "\n";
+    for (const std::string& line : fold.kept) md << "- kept in `effects:`: " << line << "\n";
+    md << "\n";
   }
   md << "## Gap over the whole run\n\n"
      << "| replay | RMS position (m) | final position (m) | RMS heading (rad) | final heading "
@@ -354,7 +366,20 @@ void write_report(const GapResult& result, const std::string& dir) {
     if (!out) throw std::runtime_error("cannot write " + (d / "report.json").string());
     out << report_json(result).dump(2) << '\n';
   }
-  save_robot_model(result.augmented, (d / "model_augmented.yaml").string());
+  {
+    // The model for the robot: what has a parameter in the robot model is folded into it, so
+    // that a reload changes what the daemon computes; the comment lines say what went where.
+    const FoldResult fold = fold_effects(result.augmented);
+    std::ofstream out(d / "model_augmented.yaml");
+    if (!out) throw std::runtime_error("cannot write " + (d / "model_augmented.yaml").string());
+    out << "# " << result.nominal.name << ", as swivel-lab gap found it in " << result.run_source
+        << "\n";
+    if (fold.folded.empty() && fold.kept.empty()) out << "# nothing named: the nominal model\n";
+    for (const std::string& line : fold.folded) out << "# folded: " << line << "\n";
+    for (const std::string& line : fold.kept) out << "# kept in effects (" << line << ")\n";
+    out << robot_model_to_yaml(fold.model);
+    if (!out) throw std::runtime_error("cannot write " + (d / "model_augmented.yaml").string());
+  }
   write_paths(result, (d / "paths.dat").string());
   write_windows(result, (d / "windows.dat").string());
   {

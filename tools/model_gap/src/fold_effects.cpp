@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "swivel/model_gap/fold_effects.hpp"
+
+#include <charconv>
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "swivel/sim/effects.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+// Ranges the robot model's reader accepts (core/src/config/robot_model_io.cpp): a folded value
+// outside them would give a model file the daemon refuses, so such an effect stays.
+constexpr double kMinGyroScale = 0.5;
+constexpr double kMaxGyroScale = 2.0;
+constexpr double kMaxGyroBiasRadps = 1.0;
+constexpr double kMaxSteeringOffsetRad = 3.2;
+
+std::string number(double value) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, r.ptr);
+}
+
+double param_or(const EffectParams& params, const std::string& key, double identity) {
+  const auto it = params.find(key);
+  return it == params.end() ? identity : it->second;
+}
+
+std::string module_key(std::size_t i, const char* suffix) {
+  return "module_" + std::to_string(i + 1) + "_" + suffix;
+}
+
+// Why the daemon cannot use an effect the robot model has no parameter for.
+const std::map<std::string, std::string>& kept_reasons() {
+  static const std::map<std::string, std::string> reasons = {
+      {"slip",
+       "the robot model has no slip parameter: the drivetrains' odometry integrates the "
+       "encoders as rolling without slip"},
+      {"actuator_lag",
+       "the robot model has no actuator response: the drivetrains command wheel and steering "
+       "rates and nothing in the daemon predicts how the drives follow them"},
+      {"steering_lag",
+       "the robot model has no actuator response: the swpc drivetrain commands steering rates "
+       "and nothing in the daemon predicts how the drives follow them"},
+      {"sensor_latency",
+       "the robot model has no latency parameter: the localizations integrate each encoder and "
+       "gyro reading as of the loop cycle it arrives in"},
+  };
+  return reasons;
+}
+
+// One parameter changed by folding: "<effect>.<key> = v -> <target> a -> b".
+struct Change {
+  std::string source;
+  std::string target;
+  double* field = nullptr;
+  double folded = 0.0;
+  double min = 0.0;
+  double max = 0.0;
+  bool bounded = false;
+};
+
+}  // namespace
+
+FoldResult fold_effects(const RobotModel& model) {
+  sim::validate_effects(model);
+  FoldResult result;
+  result.model = model;
+  result.model.effects.clear();
+  RobotModel& out = result.model;
+  const bool swpc = model.drivetrain == DrivetrainKind::kSwpc;
+
+  for (const auto& [name, params] : model.effects) {
+    std::vector<Change> changes;
+    const auto scale = [&](const std::string& key, const std::string& target, double& field) {
+      const double s = param_or(params, key, 1.0);
+      changes.push_back({name + "." + key + " = " + number(s), target, &field, field * s});
+    };
+    const auto add = [&](const std::string& key, const std::string& target, double& field,
+                         double limit) {
+      const double v = param_or(params, key, 0.0);
+      changes.push_back(
+          {name + "." + key + " = " + number(v), target, &field, field + v, -limit, limit, true});
+    };
+    if (name == "gyro_bias") {
+      add("bias_rad_s", "sensors.gyro.bias_rad_s", out.sensors.gyro.bias_rad_s, kMaxGyroBiasRadps);
+    } else if (name == "gyro_scale") {
+      scale("scale", "sensors.gyro.scale", out.sensors.gyro.scale);
+      changes.back().min = kMinGyroScale;
+      changes.back().max = kMaxGyroScale;
+      changes.back().bounded = true;
+    } else if (name == "wheel_radius" && !swpc) {
+      scale("left_scale", "differential.wheel_radius_left_m", out.differential.wheel_radius_left_m);
+      scale("right_scale", "differential.wheel_radius_right_m",
+            out.differential.wheel_radius_right_m);
+    } else if (name == "track_width" && !swpc) {
+      scale("scale", "differential.track_width_m", out.differential.track_width_m);
+    } else if (swpc &&
+               (name == "wheel_radius" || name == "caster_offset" || name == "steering_offset")) {
+      for (std::size_t i = 0; i < out.modules.size(); ++i) {
+        SwpcModuleParams& m = out.modules[i];
+        const std::string where = "swpc.modules[" + std::to_string(i) + "].";
+        if (name == "wheel_radius") {
+          scale(module_key(i, "scale"), where + "wheel_radius_m", m.wheel_radius_m);
+        } else if (name == "caster_offset") {
+          scale(module_key(i, "scale"), where + "caster_offset_m", m.caster_offset_m);
+        } else {
+          add(module_key(i, "rad"), where + "steering_offset_rad", m.steering_offset_rad,
+              kMaxSteeringOffsetRad);
+        }
+      }
+    } else {
+      const auto reason = kept_reasons().find(name);
+      result.kept.push_back(name + ": " +
+                            (reason != kept_reasons().end()
+                                 ? reason->second
+                                 : std::string("no parameter of the robot model holds it")));
+      out.effects[name] = params;
+      continue;
+    }
+    // All or nothing: an effect whose folded value the model file could not hold stays whole.
+    const Change* outside = nullptr;
+    for (const Change& c : changes) {
+      if (c.bounded && !(c.folded >= c.min && c.folded <= c.max)) outside = &c;
+    }
+    if (outside != nullptr) {
+      result.kept.push_back(name + ": folded, " + outside->target + " would be " +
+                            number(outside->folded) + ", outside the robot model's [" +
+                            number(outside->min) + ", " + number(outside->max) + "]");
+      out.effects[name] = params;
+      continue;
+    }
+    for (const Change& c : changes) {
+      result.folded.push_back(c.source + " -> " + c.target + " " + number(*c.field) + " -> " +
+                              number(c.folded));
+      *c.field = c.folded;
+    }
+  }
+  return result;
+}
+
+}  // namespace swivel::model_gap
