@@ -46,6 +46,11 @@ int run_gap(const GapCommandOptions& o) {
       }
     }
   }
+  std::cout
+      << "motion capture (nuisances, fitted with the sensor question; never robot effects):\n";
+  for (const std::string& line : model_gap::truth_nuisance_lines(result))
+    std::cout << "  " << line << "\n";
+  for (const std::string& note : result.notes) std::cout << "note: " << note << "\n";
   for (const auto& p : result.pose_gaps) {
     std::cout << "  " << model_gap::question_title(p.question) << " replay: final position error "
               << std::setprecision(4) << p.final_position_m_before << " m -> "

@@ -33,6 +33,8 @@ std::string run_log_csv(const RunSpec& spec, const RunRecord& record) {
   out += swpc ? "# drivetrain: swpc\n# modules: 4\n" : "# drivetrain: differential\n";
   // Its gyro reports the mean rate since the previous row (simulation.cpp).
   out += "# gyro_wz: mean over the row\n";
+  // Its motion capture is the simulated truth, stamped on the same clock as the encoders.
+  out += "# truth_clock: shared\n";
   out += "# source: swivel-independent-run (independent robot generator), seed " +
          std::to_string(spec.seed) + "\n";
   out += "t,cmd_vx,cmd_vy,cmd_wz";

@@ -16,9 +16,54 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Eigenvalues of a covariance below this share of the largest are directions it leaves out.
 constexpr double kRankTolerance = 1e-9;
-// Eigenvalues of J'J (parameters in their typical magnitudes) below this share of the
-// largest are combinations the run does not inform enough to fix.
+// Eigenvalues of J'J, scaled to a unit diagonal, below this share of the largest are
+// combinations the run does not inform enough to fix.
 constexpr double kWeakInformation = 1e-3;
+
+// The information J'J (z units) split into the combinations the run fixes and those it does
+// not. It is judged scaled to a unit diagonal, y = z / d with d = 1 / sqrt(diag): each
+// parameter against its own spread, so that how strongly one parameter acts (a lever arm of a
+// centimetre against a scale of a permille) cannot make another look uninformed; combinations
+// that trade against each other still show as small eigenvalues. A parameter with no
+// information at all is a combination not fixed.
+struct InformationSplit {
+  Eigen::VectorXd d;           ///< z = d .* y
+  Eigen::MatrixXd inverse;     ///< pseudo-inverse of J'J on the fixed combinations, z units
+  Eigen::MatrixXd null_space;  ///< projector onto the combinations not fixed, y units
+};
+
+InformationSplit split_information(const Eigen::MatrixXd& information) {
+  const Eigen::Index p = information.rows();
+  InformationSplit out;
+  out.d = Eigen::VectorXd::Ones(p);
+  const double largest = p > 0 ? information.diagonal().maxCoeff() : 0.0;
+  for (Eigen::Index a = 0; a < p; ++a) {
+    const double ii = information(a, a);
+    if (ii > 1e-14 * largest && ii > 0.0) out.d(a) = 1.0 / std::sqrt(ii);
+  }
+  Eigen::MatrixXd scaled = out.d.asDiagonal() * information * out.d.asDiagonal();
+  for (Eigen::Index a = 0; a < p; ++a) {
+    if (!(information(a, a) > 1e-14 * largest && information(a, a) > 0.0)) {
+      scaled.row(a).setZero();
+      scaled.col(a).setZero();
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  Eigen::MatrixXd inverse_y = Eigen::MatrixXd::Zero(p, p);
+  out.null_space = Eigen::MatrixXd::Zero(p, p);
+  for (Eigen::Index k = 0; k < p; ++k) {
+    const Eigen::VectorXd v = eig.eigenvectors().col(k);
+    const double lambda = eig.eigenvalues()(k);
+    if (lambda > kWeakInformation * top && lambda > 0.0) {
+      inverse_y += v * v.transpose() / lambda;
+    } else {
+      out.null_space += v * v.transpose();
+    }
+  }
+  out.inverse = out.d.asDiagonal() * inverse_y * out.d.asDiagonal();
+  return out;
+}
 
 // Every row; rows without data (NaN) count as zero so that the residual vector keeps a
 // fixed size. Forward differences with a fixed step in z: the replay is smooth in its
@@ -278,19 +323,9 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   const double windows = static_cast<double>(std::count(used.begin(), used.end(), 1));
   if (windows > static_cast<double>(p) + 1.0) omega *= windows / (windows - static_cast<double>(p));
 
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(bread);
-  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
-  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(pp, pp);
-  Eigen::MatrixXd null_space = Eigen::MatrixXd::Zero(pp, pp);
-  for (Eigen::Index k = 0; k < pp; ++k) {
-    const Eigen::VectorXd v = eig.eigenvectors().col(k);
-    const double lambda = eig.eigenvalues()(k);
-    if (lambda > kWeakInformation * top && lambda > 0.0) {
-      inverse += v * v.transpose() / lambda;
-    } else {
-      null_space += v * v.transpose();
-    }
-  }
+  const InformationSplit split = split_information(bread);
+  const Eigen::MatrixXd& inverse = split.inverse;
+  const Eigen::MatrixXd& null_space = split.null_space;
   const Eigen::MatrixXd cov = inverse * omega * inverse;
   observable.assign(p, 1);
   std::vector<double> out(p * p);
@@ -369,19 +404,15 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                                                   pp);
       information.noalias() += row * row.transpose();
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(information);
-    const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+    const InformationSplit split = split_information(information);
     Eigen::VectorXd offset(pp);
     for (std::size_t j = 0; j < p; ++j) {
       const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
       offset(static_cast<Eigen::Index>(j)) = z[j] - anchor / specs[j].scale;
     }
-    Eigen::VectorXd removed = Eigen::VectorXd::Zero(pp);
-    for (Eigen::Index k = 0; k < pp; ++k) {
-      if (eig.eigenvalues()(k) > kWeakInformation * top) continue;
-      const Eigen::VectorXd v = eig.eigenvectors().col(k);
-      removed += v * v.dot(offset);
-    }
+    // The part of the offset (in y units) along the combinations not fixed, back in z units.
+    const Eigen::VectorXd removed =
+        split.d.asDiagonal() * (split.null_space * split.d.cwiseInverse().asDiagonal() * offset);
     if (removed.norm() > 0.0) {
       for (std::size_t j = 0; j < p; ++j) {
         z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)),
@@ -408,16 +439,7 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
       bread.noalias() += row * row.transpose();
     }
     const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(bread);
-    const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
-    Eigen::MatrixXd naive = Eigen::MatrixXd::Zero(pp, pp);
-    for (Eigen::Index k = 0; k < pp; ++k) {
-      const double lambda = eig.eigenvalues()(k);
-      if (lambda > kWeakInformation * top && lambda > 0.0) {
-        naive += eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose() / lambda;
-      }
-    }
-    naive *= out.rss / dof;
+    Eigen::MatrixXd naive = split_information(bread).inverse * (out.rss / dof);
     out.naive_sigmas.resize(p);
     out.naive_covariance.resize(p * p);
     for (std::size_t a = 0; a < p; ++a) {

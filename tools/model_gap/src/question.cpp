@@ -256,6 +256,31 @@ std::string CandidateScore::label() const {
 
 namespace {
 
+// The effects' part (the first p parameters) of a fit that had the nuisance free beside
+// them: their values, sigmas and covariance; BIC counted on the effects' parameters alone, as
+// the nominal model's has its nuisance fitted too.
+FitOutcome effects_part(FitOutcome joint, std::size_t p) {
+  const std::size_t all = joint.values.size();
+  if (!joint.ok || all <= p) return joint;
+  const auto keep = [p](std::vector<double>& v) { v.resize(std::min(v.size(), p)); };
+  const auto block = [p, all](std::vector<double>& m) {
+    if (m.size() != all * all) return;
+    std::vector<double> out(p * p);
+    for (std::size_t a = 0; a < p; ++a) {
+      for (std::size_t b = 0; b < p; ++b) out[a * p + b] = m[a * all + b];
+    }
+    m = std::move(out);
+  };
+  keep(joint.values);
+  keep(joint.sigmas);
+  keep(joint.naive_sigmas);
+  joint.observable.resize(std::min(joint.observable.size(), p));
+  block(joint.covariance);
+  block(joint.naive_covariance);
+  joint.bic = bic(joint.rss, joint.n, p);
+  return joint;
+}
+
 std::size_t param_count(const std::vector<const Candidate*>& effects) {
   std::size_t p = 0;
   for (const Candidate* e : effects) p += e->params.size();
@@ -323,11 +348,33 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   Fitted nominal = fit_nominal();
   if (!nominal.fit.ok) throw std::runtime_error("the nominal model cannot be scored");
   eval.set_nuisance(nominal.fit.values);
+  if (replay.fit_nuisance_before_noise && !replay.nuisance.empty()) {
+    // The noise as it is once the nuisance is taken out, and the nuisance again with it.
+    if (eval.evaluate({}, {}, false, result.residuals_before, false)) {
+      noise = estimate_noise(result.residuals_before, w, replay.noise_x, replay.noise_floor,
+                             replay.known_variance);
+      eval.set_sigma(row_sigma(noise, replay));
+      nominal = fit_nominal();
+      if (!nominal.fit.ok) throw std::runtime_error("the nominal model cannot be scored");
+      eval.set_nuisance(nominal.fit.values);
+      eval.evaluate({}, {}, false, result.residuals_before, false);
+    }
+  }
   const auto run_fit = [&](std::vector<const Candidate*> effects,
                            const std::vector<double>& initial) {
     Fitted f;
     f.effects = std::move(effects);
-    f.fit = fit(eval.problem(f.effects, false), specs_of(f.effects, initial, {}, {}), options.fit);
+    if (replay.refit_nuisance_with_candidates && !replay.nuisance.empty()) {
+      std::vector<double> start = initial;
+      start.resize(std::min(start.size(), param_count(f.effects)));
+      f.fit = effects_part(
+          fit(eval.problem(f.effects, true),
+              specs_of(f.effects, start, replay.nuisance, eval.nuisance()), options.fit),
+          param_count(f.effects));
+    } else {
+      f.fit =
+          fit(eval.problem(f.effects, false), specs_of(f.effects, initial, {}, {}), options.fit);
+    }
     return f;
   };
   const auto single_fit = [&](const Candidate& c, const std::vector<double>& initial,
@@ -535,6 +582,13 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   const std::size_t effect_params = param_count(selected);
   result.nuisance.assign(final.fit.values.begin() + static_cast<std::ptrdiff_t>(effect_params),
                          final.fit.values.end());
+  if (final.fit.sigmas.size() == final.fit.values.size()) {
+    result.nuisance_sigmas.assign(
+        final.fit.sigmas.begin() + static_cast<std::ptrdiff_t>(effect_params),
+        final.fit.sigmas.end());
+  } else {
+    result.nuisance_sigmas.assign(result.nuisance.size(), kInf);
+  }
   eval.evaluate(selected, final.fit.values, true, result.residuals_after, false);
   result.misfits = misfit_tests(
       misfit_inputs(replay, result.residuals_after, eval.sigma(), result.residuals_before));

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -108,6 +109,17 @@ json report_json(const GapResult& r) {
   j["questions"] = json::array({question_json(r.sensor)});
   if (r.command_assessed) j["questions"].push_back(question_json(r.command));
   j["command_delay_s"] = r.command_delay_s;
+  {
+    json truth = json::object();
+    for (std::size_t i = 0; i < std::min(r.truth_names.size(), r.sensor.nuisance.size()); ++i) {
+      const double sigma =
+          i < r.sensor.nuisance_sigmas.size() ? r.sensor.nuisance_sigmas[i] : std::numeric_limits<double>::infinity();
+      truth[r.truth_names[i]] = {{"value", r.sensor.nuisance[i]},
+                                 {"sigma", std::isfinite(sigma) ? json(sigma) : json(nullptr)}};
+    }
+    j["motion_capture_nuisance"] = truth;
+    j["notes"] = r.notes;
+  }
   j["window_s"] = r.options.window_s;
   j["wall_time_s"] = r.wall_time_s;
   j["thresholds"] = {{"min_z_name", r.options.question.min_z_name},
@@ -313,6 +325,11 @@ std::string markdown(const GapResult& r, bool plots) {
     for (const std::string& line : fold.kept) md << "- kept in `effects:`: " << line << "\n";
     md << "\n";
   }
+  md << "## Motion capture\n\nFitted beside every candidate of the sensor question and never "
+        "named as robot effects (fix the motion-capture set-up with them):\n\n";
+  for (const std::string& line : truth_nuisance_lines(r)) md << "- " << line << "\n";
+  md << "\n";
+  for (const std::string& note : r.notes) md << "Note: " << note << "\n\n";
   md << "## Gap over the whole run\n\n"
      << "| replay | RMS position (m) | final position (m) | RMS heading (rad) | final heading "
         "(rad) |\n"

@@ -43,14 +43,35 @@ void check_run_fits_model(const RobotModel& model, const RunData& run) {
   }
 }
 
+TruthNuisance TruthNuisance::from(std::span<const double> values) {
+  TruthNuisance n;
+  if (values.size() > 0) n.yaw_offset_rad = values[0];
+  if (values.size() > 2) {
+    n.lever_x_m = values[1];
+    n.lever_y_m = values[2];
+  }
+  if (values.size() > 3) n.time_offset_s = values[3];
+  return n;
+}
+
 Pose2 run_start_pose(const RunData& run) {
   double sx = 0.0;
   double sy = 0.0;
   double syaw = 0.0;
   double count = 0.0;
+  // A run without commands is at rest until a wheel has turned by more than an encoder's
+  // worth of noise.
+  const auto wheels_moved = [&run](std::size_t k) {
+    for (const std::vector<double>& wheel : run.wheel_rad) {
+      if (std::abs(wheel[k] - wheel[0]) > 1e-2) return true;
+    }
+    return false;
+  };
   for (std::size_t k = 0; k < run.size(); ++k) {
     const bool moving =
-        run.cmd_vx_mps[k] != 0.0 || run.cmd_vy_mps[k] != 0.0 || run.cmd_wz_radps[k] != 0.0;
+        std::isfinite(run.cmd_vx_mps[k])
+            ? run.cmd_vx_mps[k] != 0.0 || run.cmd_vy_mps[k] != 0.0 || run.cmd_wz_radps[k] != 0.0
+            : wheels_moved(k);
     if (count > 0.0 && (moving || run.t_s[k] - run.t_s[0] > 1.0)) break;
     if (!std::isfinite(run.truth_x_m[k])) continue;
     sx += run.truth_x_m[k];
@@ -70,6 +91,8 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     : run_(&run) {
   check_run_fits_model(nominal, run);
   swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
+  gyro_ = run.has_gyro;
+  fit_time_offset_ = !run.truth_clock_shared;
   modules_ = run.module_count;
   start_ = run_start_pose(run);
   const std::size_t n = run.size();
@@ -90,32 +113,45 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   };
   add("dead_reckoning.dx_m", "m", ChannelKind::kPosition);
   add("dead_reckoning.dy_m", "m", ChannelKind::kPosition);
-  add("dead_reckoning.dyaw_gyro_rad", "rad", ChannelKind::kHeading);
+  if (gyro_) add("dead_reckoning.dyaw_gyro_rad", "rad", ChannelKind::kHeading);
   add("dead_reckoning.dyaw_encoders_rad", "rad", ChannelKind::kHeading);
+  // Scales (what a fit step moves): half a degree, a centimetre, ten milliseconds; of like
+  // effect on the residuals, so that no one of them looks uninformed beside the others.
+  nuisance_.push_back({"truth.yaw_offset_rad", 0.0, 1e-2, -0.2, 0.2});
+  nuisance_.push_back({"truth.lever_x_m", 0.0, 1e-2, -0.5, 0.5});
+  nuisance_.push_back({"truth.lever_y_m", 0.0, 1e-2, -0.5, 0.5});
+  if (fit_time_offset_)
+    nuisance_.push_back({"truth.time_offset_s", 0.0, 1e-2, -kMaxTimeOffsetS, kMaxTimeOffsetS});
 
-  windows_ = make_windows(run, window_s, run.t_s.front(), run.t_s.back() - kMaxLatencyS);
+  // The windows leave room at the ends for the longest shift a fit may try.
+  const double lead = fit_time_offset_ ? kMaxTimeOffsetS : 0.0;
+  const double tail = fit_time_offset_ ? kMaxTimeOffsetS + kMaxLatencyS : kMaxLatencyS;
+  windows_ = make_windows(run, window_s, run.t_s.front() + lead, run.t_s.back() - tail);
   motion_ = window_motion(run, windows_);
   // Anchors use the nominal dead reckoning as the local shape of the path.
   std::vector<Pose2> shape;
-  path(sim::resolve_plant(nominal), shape);
+  path(sim::resolve_plant(nominal), TruthNuisance{}, shape);
   for (const Window& w : windows_) {
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
 }
 
-bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row) const {
+bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,
+                             std::size_t end_row) const {
   const RunData& run = *run_;
   const std::size_t n = std::min(run.size(), end_row);
   localization::EgConfig config;
-  config.heading_source = localization::HeadingSource::kGyro;
+  // Without a gyro the heading is the encoders' (the E/G odometry's alternative).
+  config.heading_source =
+      gyro_ ? localization::HeadingSource::kGyro : localization::HeadingSource::kEncoders;
   config.gyro_scale = plant.sensors.gyro.scale;
   config.gyro_bias_radps = plant.sensors.gyro.bias_rad_s;
   localization::EgOdometry eg(config);
-  eg.reset(start_);
+  eg.reset(start);
   track_.resize(run.size());
   encoder_yaw_.resize(run.size());
-  track_[0] = start_;
+  track_[0] = start;
   encoder_yaw_[0] = 0.0;
   const double g = plant.slip_gain_per_radps2;
   std::array<double, kMaxModules> dpsi{};
@@ -151,10 +187,12 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, std::size_t end_row)
     // means, else the trapezoid of the readings at the row's ends (swivel/run_log.hpp). At a
     // step of the rate within the row its error is at most half the step times dt, either
     // way; the reading at t[k] taken as the mean would turn every step early, all one way.
-    const double gyro_mean = run.gyro_mean_over_row
-                                 ? run.gyro_radps[k]
-                                 : 0.5 * (run.gyro_radps[k - 1] + run.gyro_radps[k]);
-    if (!eg.step(delta, dt, gyro_mean, true)) return false;
+    double gyro_mean = 0.0;
+    if (gyro_) {
+      gyro_mean = run.gyro_mean_over_row ? run.gyro_radps[k]
+                                         : 0.5 * (run.gyro_radps[k - 1] + run.gyro_radps[k]);
+    }
+    if (!eg.step(delta, dt, gyro_mean, gyro_)) return false;
     const Pose2 p = eg.pose();
     track_[k] = Pose2{p.x_m, p.y_m, eg.unwrapped_yaw_rad()};
     encoder_yaw_[k] = encoder_yaw_[k - 1] + delta.yaw_rad;
@@ -182,37 +220,42 @@ double SensorReplay::encoder_yaw_at(double t_s) const {
   return encoder_yaw_[k - 1] + f * (encoder_yaw_[k] - encoder_yaw_[k - 1]);
 }
 
-bool SensorReplay::residuals(const sim::PlantParams& plant, std::vector<double>& out,
-                             std::size_t window_limit) const {
+bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance& truth,
+                             std::vector<double>& out, std::size_t window_limit) const {
   const std::size_t w = windows_.size();
   out.assign(channels_.size() * w, kNaN);
   const std::size_t used = std::min(w, window_limit);
   // Rows up to the last window's end plus the longest latency a fit may try.
   std::size_t end_row = run_->size();
+  const double shift = plant.sensor_delay_s - truth.time_offset_s;
   if (used > 0 && used < w) {
     end_row = windows_[used - 1].b + 1;
     while (end_row < run_->size() &&
-           run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + kMaxLatencyS)
+           run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + std::max(shift, 0.0))
       ++end_row;
   }
-  if (!integrate(plant, end_row)) return false;
-  // Encoders and gyro lag motion capture by the delay: what they say at t + delay is where
-  // the robot was at t.
-  const double delay = plant.sensor_delay_s;
+  if (!integrate(plant, start_, end_row)) return false;
+  // Encoders and gyro lag the robot by the delay, motion capture by its clock offset: the
+  // motion capture's sample at t shows where the encoders put the robot at t + delay - offset.
+  // The tracked body B sits on the robot, so the robot's own change between two samples is
+  // B (Ma^-1 Mb) B^-1.
+  const Pose2 body = truth.body();
+  const Pose2 body_inverse = inverse(body);
   const std::vector<double>& t = run_->t_s;
+  const std::size_t encoder_channel = gyro_ ? 3 : 2;
   for (std::size_t j = 0; j < used; ++j) {
     const Pose2& ma = anchor_a_[j];
     const Pose2& mb = anchor_b_[j];
     if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m)) continue;
-    const double ta = t[windows_[j].a] + delay;
-    const double tb = t[windows_[j].b] + delay;
-    const Pose2 measured = between(ma, mb);
+    const double ta = t[windows_[j].a] + shift;
+    const double tb = t[windows_[j].b] + shift;
+    const Pose2 measured = compose(compose(body, between(ma, mb)), body_inverse);
     const Pose2 predicted = between(pose_at(ta), pose_at(tb));
     const double encoder_turn = encoder_yaw_at(tb) - encoder_yaw_at(ta);
     out[0 * w + j] = measured.x_m - predicted.x_m;
     out[1 * w + j] = measured.y_m - predicted.y_m;
-    out[2 * w + j] = measured.yaw_rad - predicted.yaw_rad;
-    out[3 * w + j] = (mb.yaw_rad - ma.yaw_rad) - encoder_turn;
+    if (gyro_) out[2 * w + j] = (mb.yaw_rad - ma.yaw_rad) - (predicted.yaw_rad);
+    out[encoder_channel * w + j] = (mb.yaw_rad - ma.yaw_rad) - encoder_turn;
   }
   for (double v : out) {
     if (std::isinf(v)) return false;
@@ -220,11 +263,19 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, std::vector<double>&
   return true;
 }
 
-void SensorReplay::path(const sim::PlantParams& plant, std::vector<Pose2>& out) const {
+void SensorReplay::path(const sim::PlantParams& plant, const TruthNuisance& truth,
+                        std::vector<Pose2>& out) const {
   const std::size_t n = run_->size();
   out.assign(n, Pose2{kNaN, kNaN, kNaN});
-  if (!integrate(plant, n)) return;
-  for (std::size_t k = 0; k < n; ++k) out[k] = pose_at(run_->t_s[k] + plant.sensor_delay_s);
+  const Pose2 body = truth.body();
+  // The robot starts where the tracked body at rest says it is.
+  if (!integrate(plant, compose(start_, inverse(body)), n)) return;
+  const double shift = plant.sensor_delay_s - truth.time_offset_s;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Pose2 robot = pose_at(run_->t_s[k] + shift);
+    // Keep the unwrapped heading: compose() leaves the sum unwrapped.
+    out[k] = compose(robot, body);
+  }
 }
 
 }  // namespace swivel::model_gap

@@ -73,10 +73,25 @@ WindowMotion window_motion(const RunData& run, const std::vector<Window>& window
     m.wheel_travel_rad[j] = travel / static_cast<double>(modules);
     double accel = 0.0;
     double angular = 0.0;
-    for (std::size_t k = win.a + 1; k <= win.b; ++k) {
-      accel += std::hypot(run.cmd_vx_mps[k] - run.cmd_vx_mps[k - 1],
-                          run.cmd_vy_mps[k] - run.cmd_vy_mps[k - 1]);
-      angular += std::abs(run.cmd_wz_radps[k] - run.cmd_wz_radps[k - 1]);
+    if (run.has_commands) {
+      for (std::size_t k = win.a + 1; k <= win.b; ++k) {
+        accel += std::hypot(run.cmd_vx_mps[k] - run.cmd_vx_mps[k - 1],
+                            run.cmd_vy_mps[k] - run.cmd_vy_mps[k - 1]);
+        angular += std::abs(run.cmd_wz_radps[k] - run.cmd_wz_radps[k - 1]);
+      }
+    } else {
+      // Without commands: how much the wheels' rates changed (rad/s, a regressor whose scale
+      // does not matter), from rates over +-2 rows to keep encoder quantization out.
+      const auto rate = [&run](std::size_t i, std::size_t k) {
+        const std::size_t lo = k >= 2 ? k - 2 : 0;
+        const std::size_t hi = std::min(run.size() - 1, k + 2);
+        const double dt = run.t_s[hi] - run.t_s[lo];
+        return dt > 0.0 ? (run.wheel_rad[i][hi] - run.wheel_rad[i][lo]) / dt : 0.0;
+      };
+      for (std::size_t k = win.a + 1; k <= win.b; ++k) {
+        for (std::size_t i = 0; i < modules; ++i)
+          accel += std::abs(rate(i, k) - rate(i, k - 1)) / static_cast<double>(modules);
+      }
     }
     const double d = std::max(m.duration_s[j], 1e-9);
     m.accel_mps2[j] = accel / d;

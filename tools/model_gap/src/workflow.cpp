@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <numbers>
+#include <sstream>
 
 #include "swivel/model_gap/command_replay.hpp"
 #include "swivel/model_gap/sensor_replay.hpp"
@@ -114,7 +116,99 @@ double count_floor(double counts_per_rev) {
   return q * q / 6.0;
 }
 
+std::string plus_minus(double value, double sigma, double unit, int precision) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << value * unit << " +- ";
+  if (std::isfinite(sigma)) {
+    s << sigma * unit;
+  } else {
+    s << "(not fixed by the run)";
+  }
+  return s.str();
+}
+
+std::vector<double> squared_wheel_travel(const WindowMotion& motion) {
+  std::vector<double> out(motion.wheel_travel_rad.size());
+  for (std::size_t j = 0; j < out.size(); ++j)
+    out[j] = motion.wheel_travel_rad[j] * motion.wheel_travel_rad[j];
+  return out;
+}
+
+std::vector<double> window_acceleration(const WindowMotion& motion) {
+  std::vector<double> out(motion.accel_mps2.size());
+  // A turn's angular acceleration counts as the acceleration of a point 0.2 m out.
+  for (std::size_t j = 0; j < out.size(); ++j)
+    out[j] = motion.accel_mps2[j] + 0.2 * motion.angular_accel_radps2[j];
+  return out;
+}
+
 }  // namespace
+
+QuestionReplay sensor_question_replay(const SensorReplay& sensors, const RobotModel& nominal) {
+  const std::size_t w = sensors.windows().size();
+  const WindowMotion& motion = sensors.motion();
+  const std::vector<double> travel_sq = squared_wheel_travel(motion);
+  QuestionReplay sq;
+  sq.channels = sensors.channels();
+  sq.windows = w;
+  sq.residuals = [&sensors](const RobotModel& model, std::span<const double> nuisance,
+                            std::vector<double>& out, std::size_t window_limit) {
+    return sensors.residuals(sim::resolve_plant(model), TruthNuisance::from(nuisance), out,
+                             window_limit);
+  };
+  sq.nuisance = sensors.nuisance();
+  sq.fit_nuisance_before_noise = true;
+  sq.refit_nuisance_with_candidates = true;
+  for (std::size_t c = 0; c < sq.channels.size(); ++c) {
+    sq.noise_x.push_back(travel_sq);
+    sq.noise_floor.push_back(sq.channels[c].kind == ChannelKind::kPosition
+                                 ? position_floor(nominal)
+                                 : heading_floor(nominal));
+  }
+  sq.own_change.resize(sq.channels.size() * w);
+  for (std::size_t j = 0; j < w; ++j) {
+    const Pose2 change = between(sensors.anchors_start()[j], sensors.anchors_end()[j]);
+    sq.own_change[0 * w + j] = change.x_m;
+    sq.own_change[1 * w + j] = change.y_m;
+    for (std::size_t c = 2; c < sq.channels.size(); ++c) sq.own_change[c * w + j] = change.yaw_rad;
+    sq.start_yaw_rad.push_back(sensors.anchors_start()[j].yaw_rad);
+  }
+  sq.accel = window_acceleration(motion);
+  sq.wheel_sin_change = motion.wheel_sin_change;
+  sq.wheel_cos_change = motion.wheel_cos_change;
+  return sq;
+}
+
+PoseGap compare_paths(Question question, const RunData& run, const std::vector<Pose2>& before,
+                      const std::vector<Pose2>& after) {
+  return pose_gap(question, run, before, after);
+}
+
+std::vector<std::string> truth_nuisance_lines(const GapResult& r) {
+  std::vector<std::string> out;
+  const std::vector<double>& v = r.sensor.nuisance;
+  const std::vector<double>& s = r.sensor.nuisance_sigmas;
+  const auto sigma = [&s](std::size_t i) {
+    return i < s.size() ? s[i] : std::numeric_limits<double>::infinity();
+  };
+  for (std::size_t i = 0; i < std::min(v.size(), r.truth_names.size()); ++i) {
+    const std::string& n = r.truth_names[i];
+    if (n == "truth.yaw_offset_rad") {
+      out.push_back("tracked body's yaw offset (its heading minus the robot's): " +
+                    plus_minus(v[i], sigma(i), 1e3, 2) + " mrad");
+    } else if (n == "truth.lever_x_m") {
+      out.push_back("tracked body's origin, robot x: " + plus_minus(v[i], sigma(i), 1e3, 1) +
+                    " mm");
+    } else if (n == "truth.lever_y_m") {
+      out.push_back("tracked body's origin, robot y: " + plus_minus(v[i], sigma(i), 1e3, 1) +
+                    " mm");
+    } else if (n == "truth.time_offset_s") {
+      out.push_back("motion capture's clock offset (late against the encoders): " +
+                    plus_minus(v[i], sigma(i), 1e3, 1) + " ms");
+    }
+  }
+  return out;
+}
 
 std::vector<FittedEffect> GapResult::named() const {
   std::vector<FittedEffect> out = sensor.named;
@@ -133,9 +227,20 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
     result.motion_capture.push_back(
         Pose2{run.truth_x_m[k], run.truth_y_m[k], run.truth_yaw_rad[k]});
   }
-  result.segments = phase_segments(classify_phases(run.commands()), run.t_s);
+  if (run.has_commands) result.segments = phase_segments(classify_phases(run.commands()), run.t_s);
 
   const SensorReplay sensors(nominal, run, options.window_s);
+  if (!sensors.uses_gyro()) {
+    result.notes.push_back(
+        "The run has no gyro: the dead reckoning takes its heading from the encoders, and the "
+        "gyro channel and the gyro_bias and gyro_scale candidates are left out.");
+  }
+  if (sensors.fits_time_offset()) {
+    result.notes.push_back(
+        "The run does not declare a shared clock for motion capture (`# truth_clock: shared`): "
+        "the motion capture's time offset is fitted, and sensor_latency, which this question "
+        "cannot tell from it, is not a candidate.");
+  }
   const std::vector<Window>& windows = sensors.windows();
   const std::size_t w = windows.size();
   if (w < 10) {
@@ -146,63 +251,45 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   }
   const WindowMotion& motion = sensors.motion();
   for (std::size_t j = 0; j < w; ++j) result.window_start_s.push_back(motion.start_s[j]);
-  std::vector<double> travel_sq(w);
   std::vector<double> steer_sq(w);
-  std::vector<double> accel(w);
-  for (std::size_t j = 0; j < w; ++j) {
-    travel_sq[j] = motion.wheel_travel_rad[j] * motion.wheel_travel_rad[j];
+  for (std::size_t j = 0; j < w; ++j)
     steer_sq[j] = motion.steer_travel_rad[j] * motion.steer_travel_rad[j];
-    // A turn's angular acceleration counts as the acceleration of a point 0.2 m out.
-    accel[j] = motion.accel_mps2[j] + 0.2 * motion.angular_accel_radps2[j];
-  }
+  const std::vector<double> travel_sq = squared_wheel_travel(motion);
+  const std::vector<double> accel = window_acceleration(motion);
   std::vector<double> start_yaw(w);
-  std::vector<Pose2> measured_change(w);
-  for (std::size_t j = 0; j < w; ++j) {
-    start_yaw[j] = sensors.anchors_start()[j].yaw_rad;
-    measured_change[j] = between(sensors.anchors_start()[j], sensors.anchors_end()[j]);
-  }
+  for (std::size_t j = 0; j < w; ++j) start_yaw[j] = sensors.anchors_start()[j].yaw_rad;
 
   // Question 1: sensor to pose.
-  QuestionReplay sq;
-  sq.channels = sensors.channels();
-  sq.windows = w;
-  sq.residuals = [&sensors](const RobotModel& model, std::span<const double>,
-                            std::vector<double>& out, std::size_t window_limit) {
-    return sensors.residuals(sim::resolve_plant(model), out, window_limit);
-  };
-  for (std::size_t c = 0; c < sq.channels.size(); ++c) {
-    sq.noise_x.push_back(travel_sq);
-    sq.noise_floor.push_back(sq.channels[c].kind == ChannelKind::kPosition
-                                 ? position_floor(nominal)
-                                 : heading_floor(nominal));
-  }
-  sq.own_change.resize(sq.channels.size() * w);
-  for (std::size_t j = 0; j < w; ++j) {
-    sq.own_change[0 * w + j] = measured_change[j].x_m;
-    sq.own_change[1 * w + j] = measured_change[j].y_m;
-    sq.own_change[2 * w + j] = measured_change[j].yaw_rad;
-    sq.own_change[3 * w + j] = measured_change[j].yaw_rad;
-  }
-  sq.accel = accel;
-  sq.start_yaw_rad = start_yaw;
-  sq.wheel_sin_change = motion.wheel_sin_change;
-  sq.wheel_cos_change = motion.wheel_cos_change;
-  sensors.path(sim::resolve_plant(nominal), result.dead_reckoning_before);
-  const MotionPeaks peaks = motion_peaks(run, result.dead_reckoning_before);
-  result.sensor = analyse_question(Question::kSensorToPose, nominal, sq,
-                                   candidate_library(nominal, Question::kSensorToPose, peaks),
-                                   options.question);
+  const QuestionReplay sq = sensor_question_replay(sensors, nominal);
+  // The robot's own dead-reckoned path (no motion-capture nuisance): the limits' starting
+  // values and the command replay's view of the motion.
+  std::vector<Pose2> robot_path;
+  sensors.path(sim::resolve_plant(nominal), TruthNuisance{}, robot_path);
+  const MotionPeaks peaks = motion_peaks(run, robot_path);
+  std::vector<Candidate> sensor_library =
+      candidate_library(nominal, Question::kSensorToPose, peaks);
+  std::erase_if(sensor_library, [&sensors](const Candidate& c) {
+    const bool gyro = c.name == "gyro_bias" || c.name == "gyro_scale";
+    return (gyro && !sensors.uses_gyro()) ||
+           (c.name == "sensor_latency" && sensors.fits_time_offset());
+  });
+  result.sensor =
+      analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, options.question);
+  result.truth = TruthNuisance::from(result.sensor.nuisance);
+  result.truth_names.clear();
+  for (const ParamSpec& p : sensors.nuisance()) result.truth_names.push_back(p.name);
   // The command question starts from what the sensors showed, unless they showed something
   // the library cannot name.
   const RobotModel command_base =
       result.sensor.verdict == Verdict::kNamed ? result.sensor.augmented : nominal;
-  sensors.path(sim::resolve_plant(command_base), result.dead_reckoning_after);
+  sensors.path(sim::resolve_plant(nominal), result.truth, result.dead_reckoning_before);
+  sensors.path(sim::resolve_plant(command_base), result.truth, result.dead_reckoning_after);
 
   // Question 2: command to motion.
-  result.command_assessed = !options.sensor_only;
+  result.command_assessed = !options.sensor_only && run.has_commands;
   result.augmented = command_base;
   if (result.command_assessed) {
-    const CommandReplay commands(nominal, run, sensors, result.dead_reckoning_before);
+    const CommandReplay commands(nominal, run, sensors, robot_path);
     QuestionReplay cq;
     cq.channels = commands.channels();
     cq.windows = w;
@@ -241,7 +328,9 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
     commands.path(result.augmented, result.command_delay_s, result.replay_after);
   } else {
     result.command.question = Question::kCommandToMotion;
-    result.command.summary = "Command to motion: not assessed.";
+    result.command.summary = run.has_commands
+                                 ? "Command to motion: not assessed."
+                                 : "Command to motion: not assessed (the run has no commands).";
   }
 
   result.pose_gaps.push_back(pose_gap(Question::kSensorToPose, run, result.dead_reckoning_before,

@@ -64,6 +64,14 @@ struct QuestionReplay {
       residuals;
   /// Fitted with every candidate and never named (e.g. the commands' timing).
   std::vector<ParamSpec> nuisance;
+  /// Fit the nuisance on the nominal model before the noise is measured, and measure the
+  /// noise (and the "before" residual) with it: for nuisances that are not small against the
+  /// noise (a motion-capture body's offset), which would otherwise inflate it.
+  bool fit_nuisance_before_noise = false;
+  /// Refit the nuisance beside every candidate (else it stays where the nominal model put it
+  /// until the selection is refitted): for nuisances that trade against effects (a tracked
+  /// body's offset against a wrong geometry), cheap to refit.
+  bool refit_nuisance_with_candidates = false;
   std::vector<double> own_change;            ///< channel-major, for the misfit tests
   std::vector<std::vector<double>> noise_x;  ///< [channel][window], NoiseModel's x
   std::vector<double> noise_floor;           ///< per channel, variance
@@ -133,6 +141,7 @@ struct QuestionResult {
   std::vector<MisfitTest> misfits;         ///< on the residual that remains, most significant first
   std::vector<ChannelGap> channels;
   std::vector<double> nuisance;          ///< fitted nuisance values (with the selection)
+  std::vector<double> nuisance_sigmas;   ///< their 1-sigma (infinite: not fixed by the run)
   std::vector<double> residuals_before;  ///< channel-major, channel units
   std::vector<double> residuals_after;
   RobotModel augmented;  ///< base plus the named effects

@@ -7,13 +7,26 @@
 // enter.
 //
 // Channels, per window, in the robot frame at the window's start:
-//   dead_reckoning.dx_m, .dy_m   displacement (encoders, heading from the gyro)
-//   dead_reckoning.dyaw_gyro_rad heading change from the gyro
+//   dead_reckoning.dx_m, .dy_m   displacement (encoders, heading from the gyro; from the
+//                                encoders when the run has no gyro)
+//   dead_reckoning.dyaw_gyro_rad heading change from the gyro (only when the run has one)
 //   dead_reckoning.dyaw_encoders_rad heading change from the encoders (and steering) alone
+//
+// Motion capture tracks a rigid body that is never mounted exactly on the robot's reference
+// point and axis, and a hand-synchronised log has its own clock offset. These are nuisances,
+// fitted with every candidate and never named as robot effects (TruthNuisance):
+//   truth.yaw_offset_rad   the tracked body's heading minus the robot's
+//   truth.lever_x_m, _y_m  the tracked body's origin in the robot frame
+//   truth.time_offset_s    how late the motion capture's time stamps are against the
+//                          encoders' (either sign); fitted only when the run does not declare
+//                          a shared clock (`# truth_clock: shared`), since in this question it
+//                          cannot be told from a sensor latency
 
+#include <span>
 #include <vector>
 
 #include "swivel/model_gap/channels.hpp"
+#include "swivel/model_gap/fit.hpp"
 #include "swivel/model_gap/run_data.hpp"
 #include "swivel/model_gap/windows.hpp"
 #include "swivel/robot_model.hpp"
@@ -21,14 +34,38 @@
 
 namespace swivel::model_gap {
 
+/// Where the tracked body sits on the robot, and the motion capture's clock offset.
+struct TruthNuisance {
+  double yaw_offset_rad = 0.0;
+  double lever_x_m = 0.0;
+  double lever_y_m = 0.0;
+  double time_offset_s = 0.0;
+
+  /// The tracked body's pose in the robot frame.
+  [[nodiscard]] Pose2 body() const { return Pose2{lever_x_m, lever_y_m, yaw_offset_rad}; }
+  /// From the nuisance values in SensorReplay::nuisance() order.
+  static TruthNuisance from(std::span<const double> values);
+};
+
 class SensorReplay {
  public:
   /// Longest sensor latency a fit may try: the windows end this long before the run does.
   static constexpr double kMaxLatencyS = 0.25;
+  /// Largest motion-capture clock offset fitted, either sign (hand-synchronised logs are
+  /// seen up to about a third of a second out).
+  static constexpr double kMaxTimeOffsetS = 0.5;
 
   /// @throws std::invalid_argument when the run does not fit the model (drivetrain, module
   /// count), is shorter than 10 rows, or has no motion capture.
   SensorReplay(const RobotModel& nominal, const RunData& run, double window_s);
+
+  /// The nuisance parameters the question fits beside every candidate (TruthNuisance, in
+  /// that order; the time offset only when the run's clocks are not declared shared).
+  [[nodiscard]] const std::vector<ParamSpec>& nuisance() const { return nuisance_; }
+  /// The run has a gyro: its heading drives the dead reckoning and it has its own channel.
+  [[nodiscard]] bool uses_gyro() const { return gyro_; }
+  /// The motion capture's clock offset is fitted (the run does not declare a shared clock).
+  [[nodiscard]] bool fits_time_offset() const { return fit_time_offset_; }
 
   [[nodiscard]] const std::vector<ChannelInfo>& channels() const { return channels_; }
   [[nodiscard]] const std::vector<Window>& windows() const { return windows_; }
@@ -43,21 +80,28 @@ class SensorReplay {
   /// (out[c * windows + w]), for a robot with parameters `plant`; only the first
   /// `window_limit` windows are replayed (the rest are NaN). False when the dead reckoning
   /// fails (degenerate kinematics or non-finite values).
-  bool residuals(const sim::PlantParams& plant, std::vector<double>& out,
+  bool residuals(const sim::PlantParams& plant, const TruthNuisance& truth,
+                 std::vector<double>& out,
                  std::size_t window_limit = static_cast<std::size_t>(-1)) const;
 
-  /// The dead-reckoned path, one pose per row (unwrapped heading), from start_pose(),
-  /// with the sensor latency taken out (the pose at row k is the one for time t_k).
-  void path(const sim::PlantParams& plant, std::vector<Pose2>& out) const;
+  /// The dead-reckoned path, one pose per row (unwrapped heading), as the motion capture
+  /// would see it: the robot started where the motion capture put it at rest, its path
+  /// carried to the tracked body and shifted by the sensor latency and the clock offset (the
+  /// pose at row k is comparable with the motion capture of row k).
+  void path(const sim::PlantParams& plant, const TruthNuisance& truth,
+            std::vector<Pose2>& out) const;
 
  private:
-  bool integrate(const sim::PlantParams& plant, std::size_t end_row) const;
+  bool integrate(const sim::PlantParams& plant, const Pose2& start, std::size_t end_row) const;
   Pose2 pose_at(double t_s) const;
   double encoder_yaw_at(double t_s) const;
 
   const RunData* run_ = nullptr;
   bool swpc_ = false;
+  bool gyro_ = true;
+  bool fit_time_offset_ = true;
   std::size_t modules_ = 2;
+  std::vector<ParamSpec> nuisance_;
   Pose2 start_;
   std::vector<std::vector<double>> slip_h_;  // 1/2 w|w| of the smoothed wheel rates
   std::vector<ChannelInfo> channels_;

@@ -16,6 +16,7 @@
 #include "swivel/model_gap/locate.hpp"
 #include "swivel/model_gap/question.hpp"
 #include "swivel/model_gap/run_data.hpp"
+#include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/robot_model.hpp"
 #include "swivel/types.hpp"
 
@@ -47,8 +48,14 @@ struct GapResult {
   RobotModel augmented;          ///< nominal plus every named effect (and fitted limits)
   QuestionResult sensor;         ///< question 1
   QuestionResult command;        ///< question 2
-  bool command_assessed = true;  ///< false with GapOptions::sensor_only
-  std::string summary;           ///< one line per question
+  bool command_assessed = true;  ///< false with GapOptions::sensor_only or without commands
+  /// The motion capture's nuisances as fitted with the sensor question's selection (never
+  /// robot effects): the tracked body's offset and the clock offset.
+  TruthNuisance truth;
+  std::vector<std::string> truth_names;  ///< the ones fitted, QuestionResult::nuisance order
+  /// What the run lacked and what the workflow left out for it (no gyro, no commands, ...).
+  std::vector<std::string> notes;
+  std::string summary;  ///< one line per question
   std::vector<PoseGap> pose_gaps;
   // Paths for the plots, one pose per row.
   std::vector<double> t_s;
@@ -66,6 +73,20 @@ struct GapResult {
   /// Every named effect of both questions.
   [[nodiscard]] std::vector<FittedEffect> named() const;
 };
+
+/// The sensor-to-pose question's replay of `sensors` (built with `nominal`): its channels,
+/// the nuisance it fits, the regressors of its noise model and misfit tests. `sensors` must
+/// outlive the result.
+QuestionReplay sensor_question_replay(const SensorReplay& sensors, const RobotModel& nominal);
+
+/// Pose error of two paths (one pose per row, comparable with the run's motion capture)
+/// against the motion capture.
+PoseGap compare_paths(Question question, const RunData& run, const std::vector<Pose2>& before,
+                      const std::vector<Pose2>& after);
+
+/// The motion capture's fitted nuisances, one line each in words with value +- sigma
+/// (e.g. "tracked body's yaw offset: 6.21 +- 0.05 mrad"), for the report and the console.
+std::vector<std::string> truth_nuisance_lines(const GapResult& result);
 
 /// Runs the workflow on a run with its nominal model.
 /// @throws std::invalid_argument when the run does not fit the model (drivetrain, modules)

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+// swivel-lab gap-cross: cross-run evidence for the model-gap workflow (tools/lab/GAP.md
+// "Across runs"): fit on each run of a robot, validate on the others, and check that the named
+// values agree across runs; writes DIR/cross_run.md and DIR/cross_run.json.
+
+#include <CLI/CLI.hpp>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "swivel/model_gap/cross_run.hpp"
+#include "swivel/robot_model_io.hpp"
+
+namespace swivel::lab {
+namespace {
+
+struct GapCrossOptions {
+  std::string model_file;
+  std::vector<std::string> run_files;
+  std::string out_dir;
+  model_gap::GapOptions gap;
+};
+
+int run_gap_cross(const GapCrossOptions& o) {
+  const RobotModel nominal = load_robot_model(o.model_file);
+  std::vector<model_gap::RunData> runs;
+  for (const std::string& f : o.run_files) runs.push_back(model_gap::load_run(f));
+  const model_gap::CrossRunResult r = model_gap::cross_validate(
+      nominal, runs, o.gap, [](std::size_t done, std::size_t all, const std::string& what) {
+        std::cerr << "[" << done << "/" << all << "] " << what << "\n";
+      });
+  model_gap::write_cross_run_report(r, nominal, o.out_dir);
+  std::cout << std::setprecision(4);
+  for (const model_gap::FitRun& f : r.fits) {
+    std::cout << f.run << ": " << model_gap::verdict_name(f.verdict);
+    for (const model_gap::FittedEffect& e : f.named) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i)
+        std::cout << "  " << e.name << "." << e.keys[i] << " = " << e.values[i];
+    }
+    std::cout << "\n";
+  }
+  for (const model_gap::ParameterAgreement& a : r.agreement) {
+    std::cout << a.name << ": " << a.values.size() << " runs, weighted mean "
+              << std::setprecision(6) << a.weighted_mean << " +- " << std::setprecision(2)
+              << a.sigma_of_mean << ", chi^2 " << std::setprecision(4) << a.chi_square << " / "
+              << a.dof << ", " << std::setprecision(3) << 100.0 * a.within_2_sigma
+              << " % within 2 sigma of the others\n";
+  }
+  std::cout << "median ratio of the held-out RMS position gap (fitted / nominal) over " << r.pairs
+            << " pairs: " << std::setprecision(3) << r.median_ratio << "\n"
+            << "unexplained sensor verdicts: " << r.unexplained << " of " << r.fits.size()
+            << "; runs not used: " << r.skipped.size() << "\n"
+            << "report: " << o.out_dir << "/cross_run.md\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_gap_cross_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<GapCrossOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "gap-cross",
+      "Fit the sensor-to-pose question on each run of one robot and judge the fitted model on "
+      "its other runs; check that the named values agree across runs");
+  cmd->add_option("--model", options->model_file, "nominal robot model (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", options->out_dir, "report directory (created)")->required();
+  cmd->add_option("--window", options->gap.window_s, "length of the windows compared, s")
+      ->capture_default_str()
+      ->check(CLI::Range(0.2, 10.0));
+  cmd->add_option("--min-sigma", options->gap.question.min_z_name,
+                  "significance (normal deviates) an effect needs to be named")
+      ->capture_default_str()
+      ->check(CLI::Range(2.0, 20.0));
+  cmd->add_option("runs", options->run_files, "run logs (CSV) of one robot, at least two")
+      ->required()
+      ->check(CLI::ExistingFile)
+      ->expected(2, -1);
+  cmd->callback([options, &exit_code] { exit_code = run_gap_cross(*options); });
+}
+
+}  // namespace swivel::lab

@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Cross-run evidence (tools/lab/GAP.md "Across runs"): a model fitted on one run of a robot is
+// judged on the robot's other runs. For every run in turn, the sensor-to-pose question names
+// what that run shows; the named model is then replayed on each other run beside the nominal
+// one, each with that run's own motion-capture nuisances fitted (they belong to the set-up, not
+// the robot), and the whole-run RMS position gap of the two is compared. Independently, the
+// values each run named are checked for agreement across runs within their stated sigmas.
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "swivel/model_gap/run_data.hpp"
+#include "swivel/model_gap/workflow.hpp"
+#include "swivel/robot_model.hpp"
+
+namespace swivel::model_gap {
+
+/// The sensor-to-pose gap of one run under one model, with the run's motion-capture nuisances
+/// fitted for that model.
+struct HeldOutGap {
+  std::string run;
+  double rms_position_m = 0.0;
+  double rms_heading_rad = 0.0;
+};
+
+/// Fits the motion-capture nuisances of `run` under `model` alone (no candidate effects) and
+/// returns the whole-run gap of its dead reckoning.
+/// @throws std::invalid_argument as analyse_gap for a run that does not fit the model or is
+///         too short.
+HeldOutGap held_out_gap(const RobotModel& model, const RunData& run, const GapOptions& options);
+
+/// One run used to fit, and what its model does on the others.
+struct FitRun {
+  std::string run;
+  Verdict verdict = Verdict::kNoSignificantGap;
+  std::string summary;
+  std::vector<FittedEffect> named;  ///< sensor to pose
+  std::vector<std::string> truth;   ///< its motion-capture nuisances, in words
+  RobotModel fitted;                ///< the nominal model with what it named
+  /// Per other run: nominal and fitted gap (RMS position), and their ratio fitted / nominal.
+  std::vector<std::string> others;
+  std::vector<double> nominal_rms_m;
+  std::vector<double> fitted_rms_m;
+  std::vector<double> ratio;
+};
+
+/// One named parameter across the runs that named it.
+struct ParameterAgreement {
+  std::string name;  ///< "effect.key"
+  std::vector<std::string> runs;
+  std::vector<double> values;
+  std::vector<double> sigmas;
+  double weighted_mean = 0.0;
+  double sigma_of_mean = 0.0;
+  double chi_square = 0.0;  ///< of the values about their weighted mean
+  std::size_t dof = 0;
+  /// Share of runs whose value lies within 1 (2) stated sigmas of the weighted mean of the
+  /// others.
+  double within_1_sigma = 0.0;
+  double within_2_sigma = 0.0;
+};
+
+struct CrossRunResult {
+  std::vector<FitRun> fits;
+  std::vector<std::string> skipped;  ///< "run: reason" (too short, no motion capture, ...)
+  std::vector<ParameterAgreement> agreement;
+  double median_ratio = 0.0;  ///< over every (fit run, other run) pair
+  std::size_t pairs = 0;
+  std::size_t unexplained = 0;  ///< sensor verdicts "unexplained residual"
+};
+
+/// Progress of a long cross-run analysis: (step done, steps in all, what).
+using CrossRunProgress = std::function<void(std::size_t, std::size_t, const std::string&)>;
+
+/// Fits on each run and validates on the others (every run of `runs` is of one robot).
+CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunData>& runs,
+                              const GapOptions& options, const CrossRunProgress& progress = {});
+
+/// Writes DIR/cross_run.md and DIR/cross_run.json. Creates DIR.
+/// @throws std::runtime_error when a file cannot be written.
+void write_cross_run_report(const CrossRunResult& result, const RobotModel& nominal,
+                            const std::string& dir);
+
+}  // namespace swivel::model_gap

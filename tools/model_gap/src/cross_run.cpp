@@ -1,0 +1,259 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "swivel/model_gap/cross_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "swivel/model_gap/sensor_replay.hpp"
+#include "swivel/sim/effects.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Weighted mean and its sigma of values with sigmas, leaving out index `skip` (none: size).
+std::pair<double, double> weighted_mean(const std::vector<double>& v, const std::vector<double>& s,
+                                        std::size_t skip) {
+  double sw = 0.0;
+  double swx = 0.0;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (k == skip) continue;
+    const double w = 1.0 / (s[k] * s[k]);
+    sw += w;
+    swx += w * v[k];
+  }
+  return {swx / sw, std::sqrt(1.0 / sw)};
+}
+
+std::vector<ParameterAgreement> agreement_of(const std::vector<FitRun>& fits) {
+  std::map<std::string, ParameterAgreement> by_name;
+  for (const FitRun& f : fits) {
+    for (const FittedEffect& e : f.named) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i) {
+        // What the run fixes of a parameter it cannot fix alone.
+        const double sigma = std::isfinite(e.sigmas[i]) ? e.sigmas[i] : e.partial_sigmas[i];
+        if (!(sigma > 0.0) || !std::isfinite(sigma)) continue;
+        ParameterAgreement& a = by_name[(e.limits ? "limits." : e.name + ".") + e.keys[i]];
+        a.runs.push_back(f.run);
+        a.values.push_back(e.values[i]);
+        a.sigmas.push_back(sigma);
+      }
+    }
+  }
+  std::vector<ParameterAgreement> out;
+  for (auto& [name, a] : by_name) {
+    a.name = name;
+    const std::size_t n = a.values.size();
+    std::tie(a.weighted_mean, a.sigma_of_mean) = weighted_mean(a.values, a.sigmas, n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double z = (a.values[k] - a.weighted_mean) / a.sigmas[k];
+      a.chi_square += z * z;
+    }
+    a.dof = n > 0 ? n - 1 : 0;
+    if (n > 1) {
+      double in1 = 0.0;
+      double in2 = 0.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        const auto [m, sm] = weighted_mean(a.values, a.sigmas, k);
+        const double z = std::abs(a.values[k] - m) / std::hypot(a.sigmas[k], sm);
+        in1 += z <= 1.0 ? 1.0 : 0.0;
+        in2 += z <= 2.0 ? 1.0 : 0.0;
+      }
+      a.within_1_sigma = in1 / static_cast<double>(n);
+      a.within_2_sigma = in2 / static_cast<double>(n);
+    }
+    out.push_back(a);
+  }
+  return out;
+}
+
+std::string fmt(double v, int precision = 4) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+HeldOutGap held_out_gap(const RobotModel& model, const RunData& run, const GapOptions& options) {
+  const SensorReplay sensors(model, run, options.window_s);
+  if (sensors.windows().size() < 10) {
+    throw std::invalid_argument("run " + run.source + " gives " +
+                                std::to_string(sensors.windows().size()) +
+                                " windows; the workflow needs at least 10");
+  }
+  const QuestionReplay replay = sensor_question_replay(sensors, model);
+  // No candidates: only the motion capture's nuisances are fitted, for this model.
+  const QuestionResult q =
+      analyse_question(Question::kSensorToPose, model, replay, {}, options.question);
+  std::vector<Pose2> path;
+  sensors.path(sim::resolve_plant(model), TruthNuisance::from(q.nuisance), path);
+  const PoseGap g = compare_paths(Question::kSensorToPose, run, path, path);
+  return {run.source, g.rms_position_m_before, g.rms_heading_rad_before};
+}
+
+CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunData>& runs,
+                              const GapOptions& options, const CrossRunProgress& progress) {
+  CrossRunResult result;
+  GapOptions sensor_only = options;
+  sensor_only.sensor_only = true;
+  const std::size_t n = runs.size();
+  const std::size_t steps = 2 * n;
+  std::size_t step = 0;
+  const auto tell = [&](const std::string& what) {
+    if (progress) progress(++step, steps, what);
+  };
+  // The nominal model's gap on every run (the reference of every ratio).
+  std::vector<double> nominal_gap(n, std::numeric_limits<double>::quiet_NaN());
+  std::vector<char> usable(n, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    try {
+      nominal_gap[k] = held_out_gap(nominal, runs[k], options).rms_position_m;
+      usable[k] = 1;
+    } catch (const std::exception& e) {
+      result.skipped.push_back(runs[k].source + ": " + e.what());
+    }
+    tell("nominal gap of " + runs[k].source);
+  }
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!usable[i]) {
+      tell("skipped " + runs[i].source);
+      continue;
+    }
+    const GapResult fitted = analyse_gap(nominal, runs[i], sensor_only);
+    FitRun f;
+    f.run = runs[i].source;
+    f.verdict = fitted.sensor.verdict;
+    f.summary = fitted.sensor.summary;
+    f.named = fitted.sensor.named;
+    f.truth = truth_nuisance_lines(fitted);
+    f.fitted = fitted.sensor.verdict == Verdict::kNamed ? fitted.sensor.augmented : nominal;
+    if (f.verdict == Verdict::kUnexplained) ++result.unexplained;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i || !usable[j]) continue;
+      // A run that named nothing predicts the others exactly as the nominal model does.
+      const double gap = f.named.empty() ? nominal_gap[j]
+                                         : held_out_gap(f.fitted, runs[j], options).rms_position_m;
+      f.others.push_back(runs[j].source);
+      f.nominal_rms_m.push_back(nominal_gap[j]);
+      f.fitted_rms_m.push_back(gap);
+      f.ratio.push_back(gap / nominal_gap[j]);
+      ratios.push_back(f.ratio.back());
+    }
+    result.fits.push_back(std::move(f));
+    tell("fitted on " + runs[i].source);
+  }
+  result.pairs = ratios.size();
+  result.median_ratio = median(ratios);
+  result.agreement = agreement_of(result.fits);
+  return result;
+}
+
+void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
+                            const std::string& dir) {
+  using nlohmann::json;
+  std::filesystem::create_directories(dir);
+  json j;
+  j["robot"] = nominal.name;
+  j["model"] = nominal.source_file;
+  j["median_ratio"] = r.median_ratio;
+  j["pairs"] = r.pairs;
+  j["unexplained"] = r.unexplained;
+  j["skipped"] = r.skipped;
+  json fits = json::array();
+  for (const FitRun& f : r.fits) {
+    json named = json::array();
+    for (const FittedEffect& e : f.named) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i) {
+        named.push_back(
+            {{"parameter", e.name + "." + e.keys[i]},
+             {"value", e.values[i]},
+             {"sigma", std::isfinite(e.sigmas[i]) ? json(e.sigmas[i]) : json(nullptr)}});
+      }
+    }
+    json others = json::array();
+    for (std::size_t k = 0; k < f.others.size(); ++k) {
+      others.push_back({{"run", f.others[k]},
+                        {"nominal_rms_position_m", f.nominal_rms_m[k]},
+                        {"fitted_rms_position_m", f.fitted_rms_m[k]},
+                        {"ratio", f.ratio[k]}});
+    }
+    fits.push_back({{"run", f.run},
+                    {"verdict", verdict_name(f.verdict)},
+                    {"named", named},
+                    {"motion_capture", f.truth},
+                    {"median_ratio", median(f.ratio)},
+                    {"others", others}});
+  }
+  j["fits"] = fits;
+  json agreement = json::array();
+  for (const ParameterAgreement& a : r.agreement) {
+    agreement.push_back({{"parameter", a.name},
+                         {"runs", a.runs},
+                         {"values", a.values},
+                         {"sigmas", a.sigmas},
+                         {"weighted_mean", a.weighted_mean},
+                         {"sigma_of_mean", a.sigma_of_mean},
+                         {"chi_square", a.chi_square},
+                         {"dof", a.dof},
+                         {"within_1_sigma", a.within_1_sigma},
+                         {"within_2_sigma", a.within_2_sigma}});
+  }
+  j["agreement"] = agreement;
+  std::ofstream js(dir + "/cross_run.json");
+  js << j.dump(2) << "\n";
+  if (!js) throw std::runtime_error("cannot write " + dir + "/cross_run.json");
+
+  std::ofstream md(dir + "/cross_run.md");
+  md << "# Across runs: " << nominal.name << "\n\n"
+     << "Each run in turn is analysed (sensor to pose); what it names is replayed on every other "
+        "run beside the nominal model, each run with its own motion-capture nuisances fitted. "
+        "The ratio is the whole-run RMS position gap with the fitted model over the gap with the "
+        "nominal one (below 1: the fitted model predicts a run it has not seen better).\n\n"
+     << "Median ratio over " << r.pairs << " (fit run, other run) pairs: **"
+     << fmt(r.median_ratio, 3) << "**. Unexplained verdicts: " << r.unexplained << " of "
+     << r.fits.size() << ".\n\n"
+     << "| fitted on | verdict | named | median ratio on the others |\n|---|---|---|---|\n";
+  for (const FitRun& f : r.fits) {
+    std::string named;
+    for (const FittedEffect& e : f.named) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i) {
+        named += (named.empty() ? "" : ", ") + e.name + "." + e.keys[i] + " = " +
+                 fmt(e.values[i], 6) + " +- " +
+                 (std::isfinite(e.sigmas[i]) ? fmt(e.sigmas[i], 2) : std::string("*"));
+      }
+    }
+    md << "| " << f.run << " | " << verdict_name(f.verdict) << " | " << named << " | "
+       << (f.ratio.empty() ? std::string("-") : fmt(median(f.ratio), 3)) << " |\n";
+  }
+  md << "\n## Agreement of the named values\n\n"
+     << "| parameter | runs | weighted mean | sigma of mean | chi^2 / dof | within 1 / 2 sigma "
+        "of the others |\n|---|---|---|---|---|---|\n";
+  for (const ParameterAgreement& a : r.agreement) {
+    md << "| " << a.name << " | " << a.values.size() << " | " << fmt(a.weighted_mean, 6) << " | "
+       << fmt(a.sigma_of_mean, 2) << " | " << fmt(a.chi_square, 3) << " / " << a.dof << " | "
+       << fmt(100.0 * a.within_1_sigma, 3) << " % / " << fmt(100.0 * a.within_2_sigma, 3)
+       << " % |\n";
+  }
+  if (!r.skipped.empty()) {
+    md << "\n## Runs not used\n\n";
+    for (const std::string& s : r.skipped) md << "- " << s << "\n";
+  }
+  if (!md) throw std::runtime_error("cannot write " + dir + "/cross_run.md");
+}
+
+}  // namespace swivel::model_gap
