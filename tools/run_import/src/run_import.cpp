@@ -12,6 +12,7 @@
 #include <istream>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <sstream>
 #include <string_view>
 #include <system_error>
@@ -26,12 +27,16 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr int kMaxColumnIndex = 1 << 20;
 
-using UnitTable = std::vector<std::pair<std::string, double>>;
-const UnitTable kTimeUnits = {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}};
-const UnitTable kLengthUnits = {{"m", 1.0}, {"mm", 1e-3}};
-const UnitTable kAngleUnits = {{"rad", 1.0}, {"deg", std::numbers::pi / 180.0}};
-const UnitTable kRateUnits = {{"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}};
-const UnitTable kSpeedUnits = {{"m/s", 1.0}, {"mm/s", 1e-3}};
+// A unit's name in a map and its factor to SI.
+struct Unit {
+  std::string_view name;
+  double to_si;
+};
+constexpr std::array<Unit, 4> kTimeUnits = {{{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}}};
+constexpr std::array<Unit, 2> kLengthUnits = {{{"m", 1.0}, {"mm", 1e-3}}};
+constexpr std::array<Unit, 2> kAngleUnits = {{{"rad", 1.0}, {"deg", std::numbers::pi / 180.0}}};
+constexpr std::array<Unit, 2> kRateUnits = {{{"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}}};
+constexpr std::array<Unit, 2> kSpeedUnits = {{{"m/s", 1.0}, {"mm/s", 1e-3}}};
 
 YAML::Node parse_yaml(const std::string& text, const std::string& source_name) {
   try {
@@ -47,13 +52,13 @@ YAML::Node parse_yaml(const std::string& text, const std::string& source_name) {
 
 // The unit key's factor to SI; `fallback` is the unit assumed when the key is absent (empty:
 // the key is required).
-double unit_scale(ParamReader& r, const UnitTable& units, const std::string& fallback) {
+double unit_scale(ParamReader& r, std::span<const Unit> units, const std::string& fallback) {
   std::vector<std::string> names;
-  for (const auto& u : units) names.push_back(u.first);
+  for (const Unit& u : units) names.emplace_back(u.name);
   if (fallback.empty()) r.string("unit");  // a missing unit is reported as missing
   const std::string unit = r.choice_or("unit", fallback, names);
-  for (const auto& u : units) {
-    if (u.first == unit) return u.second;
+  for (const Unit& u : units) {
+    if (u.name == unit) return u.to_si;
   }
   return 1.0;  // not reached: choice_or accepted one of the names
 }
@@ -92,7 +97,7 @@ ColumnRef column_ref(ParamReader& r, bool header_row) {
 }
 
 // A column with a unit (from `units`, `fallback` when absent) and a sign.
-ScaledColumn scaled_column(ParamReader r, bool header_row, const UnitTable& units,
+ScaledColumn scaled_column(ParamReader r, bool header_row, std::span<const Unit> units,
                            const std::string& fallback) {
   ScaledColumn s;
   s.column = column_ref(r, header_row);
@@ -158,8 +163,8 @@ void split(std::string_view line, char delimiter, std::vector<std::string_view>&
 
 class Importer {
  public:
-  Importer(std::istream& in, std::string name, const ImportMap& map)
-      : in_(in), name_(std::move(name)), map_(map) {}
+  Importer(std::istream& in, std::string name, ImportMap map)
+      : in_(in), name_(std::move(name)), map_(std::move(map)) {}
 
   RunLog run(ImportSummary& summary) {
     RunLog log;
@@ -293,7 +298,7 @@ class Importer {
     throw ImportError(name_ + ":" + std::to_string(line_number_) + ": " + message);
   }
 
-  std::string column_text(const ColumnRef& c) const {
+  [[nodiscard]] std::string column_text(const ColumnRef& c) const {
     std::string text = "column ";
     text += c.name.empty() ? std::to_string(c.index)
                            : c.name + " (index " + std::to_string(c.index) + ")";
@@ -310,7 +315,7 @@ class Importer {
     return true;
   }
 
-  bool skipped(std::string_view line) const {
+  [[nodiscard]] bool skipped(std::string_view line) const {
     if (line.empty()) return true;
     return !map_.comment_prefix.empty() &&
            line.substr(0, map_.comment_prefix.size()) == map_.comment_prefix;
@@ -377,7 +382,9 @@ class Importer {
     for (const ColumnRef* c : refs) min_columns_ = std::max(min_columns_, c->index + 1);
   }
 
-  std::string_view cell(const ScaledColumn& c) const { return cells_[c.column.index]; }
+  [[nodiscard]] std::string_view cell(const ScaledColumn& c) const {
+    return cells_[c.column.index];
+  }
 
   static std::optional<double> parse(std::string_view text) {
     if (!text.empty() && text.front() == '+') text.remove_prefix(1);
@@ -389,7 +396,7 @@ class Importer {
     return value;
   }
 
-  double required(const ScaledColumn& c) const {
+  [[nodiscard]] double required(const ScaledColumn& c) const {
     const std::string_view text = cell(c);
     const std::optional<double> v = parse(text);
     if (!v || !std::isfinite(*v)) {
@@ -399,7 +406,7 @@ class Importer {
   }
 
   // Empty or NaN: no sample. Anything else must be a finite number.
-  std::optional<double> optional(const ScaledColumn& c) const {
+  [[nodiscard]] std::optional<double> optional(const ScaledColumn& c) const {
     const std::string_view text = cell(c);
     if (text.empty()) return std::nullopt;
     const std::optional<double> v = parse(text);
@@ -446,7 +453,7 @@ ImportMap parse_import_map(const std::string& yaml_text, const std::string& sour
   } else if (delimiter.size() == 1 && delimiter != "\"" && delimiter != "\n") {
     m.delimiter = delimiter[0];
   } else {
-    input.fail("delimiter", "expected one character (or \"\\t\"), got '" + delimiter + "'");
+    input.fail("delimiter", R"(expected one character (or "\t"), got ')" + delimiter + "'");
   }
   m.comment_prefix = input.string_or("comment_prefix", "");
   input.finish();

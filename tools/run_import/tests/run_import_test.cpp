@@ -26,7 +26,7 @@ std::string source_dir() {
 }
 
 // A differential map without a header row: t, left, right, x, y, yaw.
-const std::string kMap = R"(robot: bench
+constexpr const char* kMap = R"(robot: bench
 drivetrain: differential
 input: {header_row: false}
 time: {index: 0, unit: s}
@@ -74,7 +74,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 }
 
 TEST(ImportMap, UnknownKeysAreRejectedWithTheKeyNamed) {
-  EXPECT_EQ(map_error(kMap + "colour: red\n"),
+  EXPECT_EQ(map_error(std::string(kMap) + "colour: red\n"),
             "map.yaml:12:1: colour: unknown key (known: robot, "
             "drivetrain, modules, input, time, wheels, steering, "
             "truth, gyro, commands)");
@@ -109,7 +109,7 @@ TEST(ImportMap, BadValuesNameFileLineAndKey) {
   EXPECT_EQ(map_error(replaced(kMap, "  yaw: {index: 5, unit: deg}\n", "")),
             "map.yaml:9:3: truth: missing required key 'yaw' (the motion-capture x, y and yaw "
             "come together)");
-  EXPECT_EQ(map_error(kMap + "steering: []\n"),
+  EXPECT_EQ(map_error(std::string(kMap) + "steering: []\n"),
             "map.yaml:12:1: steering: applies to swpc robots only (this one is differential)");
 }
 
