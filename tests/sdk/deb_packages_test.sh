@@ -41,13 +41,132 @@ grep -q '/bin/' "$work/dev.txt" && fail "swivel-dev carries executables"
 echo "ok: swivel holds the daemon, tools, plugins, unit, sysusers, udev rule and configuration;"
 echo "    swivel-dev the headers and the CMake package"
 
+# The package is laid out for /usr whatever prefix this build was configured with: the unit
+# starts the packaged swiveld, with the packaged configuration, and the conffiles are
+# exactly the files in /etc.
+dpkg-deb -x "$runtime" "$work/root"
+unit="$work/root/usr/lib/systemd/system/swiveld.service"
+[[ -f $unit ]] || fail "swivel has no /usr/lib/systemd/system/swiveld.service"
+exec_start=$(sed -n 's/^ExecStart=//p' "$unit")
+read -r exe _ config_file _ <<<"$exec_start"
+[[ $exe == /usr/bin/swiveld && -x $work/root$exe ]] ||
+  fail "the unit's ExecStart= runs $exe, not the packaged /usr/bin/swiveld ($exec_start)"
+[[ $config_file == /etc/swivel/swiveld.yaml && -f $work/root$config_file ]] ||
+  fail "the unit's ExecStart= reads $config_file, not the packaged /etc/swivel/swiveld.yaml"
+dds_uri=$(sed -n 's/^Environment=CYCLONEDDS_URI=//p' "$unit")
+[[ $dds_uri == file:///etc/swivel/dds/cyclonedds.xml && -f $work/root${dds_uri#file://} ]] ||
+  fail "the unit's CYCLONEDDS_URI=$dds_uri is not a packaged file"
+grep -q '/usr/local' "$unit" && fail "the packaged unit names /usr/local"
+conffiles=$(dpkg-deb --ctrl-tarfile "$runtime" | tar -xOf - ./conffiles | sort)
+etc_files=$(cd "$work/root" && find etc -type f | sed 's|^|/|' | sort)
+[[ $conffiles == "$etc_files" ]] ||
+  fail "conffiles and the files in /etc differ: $(diff <(echo "$conffiles") <(echo "$etc_files") | grep '^[<>]' | tr '\n' ' ')"
+grep -q /usr/local "$work/runtime.txt" "$work/dev.txt" && fail "a package installs into /usr/local"
+# systemd-analyze verify on the unit as packaged: its ExecStart= must exist and run.
+if command -v systemd-analyze >/dev/null; then
+  sed "s|^ExecStart=/usr/bin/swiveld|ExecStart=$work/root/usr/bin/swiveld|" "$unit" \
+    >"$work/swiveld.service"
+  out=$(systemd-analyze verify --man=no "$work/swiveld.service" 2>&1) ||
+    fail "systemd-analyze verify on the packaged unit: $out"
+  [[ -z $out ]] || fail "systemd-analyze verify on the packaged unit: $out"
+  echo "ok: systemd-analyze verify on the packaged unit (ExecStart= the unpacked swiveld): clean"
+fi
+echo "ok: the unit runs /usr/bin/swiveld --config /etc/swivel/swiveld.yaml with $dds_uri, all in the package; conffiles are exactly /etc"
+
+# Debian's metadata: a maintainer, a description, the documentation files.
+for deb in "$runtime" "$dev"; do
+  name=$(dpkg-deb -f "$deb" Package)
+  maintainer=$(dpkg-deb -f "$deb" Maintainer)
+  [[ $maintainer =~ ^[^\<]+\ \<[^@\>]+@[^\>]+\>$ && $maintainer != *localhost* ]] ||
+    fail "$name: Maintainer '$maintainer' is no name and address"
+  [[ $(dpkg-deb -f "$deb" Description | wc -l) -ge 3 ]] || fail "$name has no extended description"
+  contents "$deb" >"$work/list"
+  for f in copyright changelog.gz; do
+    grep -qx "/usr/share/doc/$name/$f" "$work/list" || fail "$name lacks /usr/share/doc/$name/$f"
+  done
+done
+echo "ok: both packages have a maintainer, an extended description, copyright and changelog"
+
+# The maintainer scripts, run with every command they call replaced by one that records its
+# arguments: nothing happens without systemd as PID 1, and with it, removal stops the
+# service and an upgrade restarts it (never a fresh install: the administrator enables it).
+for script in postinst prerm postrm; do
+  dpkg-deb --ctrl-tarfile "$runtime" | tar -xOf - "./$script" >"$work/$script" ||
+    fail "swivel has no $script"
+  chmod +x "$work/$script"
+  sh -n "$work/$script" || fail "$script is not valid sh"
+done
+mkdir -p "$work/stubs"
+for cmd in systemctl deb-systemd-invoke deb-systemd-helper systemd-sysusers udevadm rm; do
+  printf '#!/bin/sh\necho "%s $*" >>"$CALLS"\n' "$cmd" >"$work/stubs/$cmd"
+  chmod +x "$work/stubs/$cmd"
+done
+# calls SYSTEMD(yes|no) SCRIPT ARGS...: the commands SCRIPT ran, one line each.
+calls() {
+  local systemd=$1
+  shift
+  : >"$work/calls"
+  if [[ $systemd == yes ]]; then
+    # A private mount namespace with /run/systemd/system, as systemd as PID 1 makes it.
+    unshare --mount --propagation private sh -c \
+      'stubs=$0 calls=$1; shift; mount -t tmpfs tmpfs /run && mkdir -p /run/systemd/system &&
+       exec env -i PATH="$stubs" CALLS="$calls" "$@"' \
+      "$work/stubs" "$work/calls" "$work/$1" "${@:2}" || fail "$* failed (systemd running)"
+  else
+    env -i PATH="$work/stubs" CALLS="$work/calls" "$work/$1" "${@:2}" || fail "$* failed"
+  fi
+  tr '\n' ';' <"$work/calls"
+}
+expect_calls() {
+  local want=$1 got
+  shift
+  got=$(calls "$@")
+  [[ $got == "$want" ]] || fail "$*: ran '$got', expected '$want'"
+}
+sysusers='systemd-sysusers swivel.conf;udevadm trigger --subsystem-match=misc --sysname-match=cpu_dma_latency;'
+if [[ ! -d /run/systemd/system ]]; then
+  expect_calls "$sysusers" no postinst configure
+  expect_calls "$sysusers" no postinst configure 0.0.9
+  expect_calls "" no prerm remove
+  expect_calls "" no postrm remove
+  # deb-systemd-helper keeps its state in files: purging it needs no systemd.
+  expect_calls "deb-systemd-helper purge swiveld.service;deb-systemd-helper unmask swiveld.service;rm -rf /var/lib/swivel /var/log/swivel;" \
+    no postrm purge
+  echo "ok: without systemd the scripts create the user and start, stop or restart nothing"
+fi
+if [[ $(id -u) -eq 0 ]]; then
+  expect_calls "${sysusers}systemctl --system daemon-reload;" yes postinst configure
+  expect_calls "${sysusers}systemctl --system daemon-reload;deb-systemd-invoke try-restart swiveld.service;" \
+    yes postinst configure 0.0.9
+  expect_calls "deb-systemd-invoke stop swiveld.service;" yes prerm remove
+  expect_calls "" yes prerm upgrade 0.1.1
+  expect_calls "systemctl --system daemon-reload;" yes postrm remove
+  expect_calls "deb-systemd-helper purge swiveld.service;deb-systemd-helper unmask swiveld.service;rm -rf /var/lib/swivel /var/log/swivel;" \
+    yes postrm purge
+  echo "ok: with systemd, removal stops the service, an upgrade restarts it if it runs, purge forgets it"
+else
+  echo "note: not root: the maintainer scripts were not run as with systemd as PID 1"
+fi
+
+# lintian: no error and no warning that is not overridden (with its reason) in the package.
+if command -v lintian >/dev/null; then
+  lintian --allow-root "$runtime" "$dev" >"$work/lintian.log" 2>&1 || true
+  if grep -E '^(E|W):' "$work/lintian.log"; then
+    fail "lintian reports the errors and warnings above"
+  fi
+  echo "ok: lintian: no errors or warnings"
+else
+  echo "note: lintian is not installed (tools/setup installs it): not run"
+fi
+
 depends=$(dpkg-deb -f "$runtime" Depends)
-for d in libyaml-cpp0.7 libddsc0debian libspdlog1.10; do
+for d in libyaml-cpp0.7 libddsc0debian libspdlog1.10 libc6 libstdc++6; do
   grep -q "$d" <<<"$depends" || fail "swivel does not depend on $d ($depends)"
 done
-# Every library an executable or plugin links directly comes from a declared package (or
-# the C/C++ runtime every Debian has); what those need, their own packages declare.
-dpkg-deb -x "$runtime" "$work/root"
+grep -q 'libceres' <<<"$depends" && fail "swivel depends on Ceres, which is linked statically"
+grep -qE 'libc6 \(>= [0-9.]+\)' <<<"$depends" || fail "the libc6 dependency has no version: $depends"
+# Every library an executable or plugin links directly comes from a declared package;
+# what those need, their own packages declare.
 missing=""
 for f in $(find "$work/root" -type f \( -perm -u+x -o -name '*.so' \)); do
   readelf -h "$f" >/dev/null 2>&1 || continue
@@ -62,7 +181,7 @@ for f in $(find "$work/root" -type f \( -perm -u+x -o -name '*.so' \)); do
     [[ -n $path ]] || continue
     pkg=$(dpkg -S "$(readlink -f "$path")" 2>/dev/null | head -n 1 | cut -d: -f1) || true
     case "$pkg" in
-      ""|libc6|libstdc++6|libgcc-s1) ;;
+      "") ;;
       *) grep -qw -- "$pkg" <<<"$depends" || missing+=" $pkg($(basename "$f"))" ;;
     esac
   done
