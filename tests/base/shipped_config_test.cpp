@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace swivel {
 namespace {
@@ -27,10 +28,22 @@ TEST(ShippedConfig, BuildTreeExecutablesUseTheSourceTree) {
 
 TEST(ShippedConfig, OtherExecutablesUseTheInstalledCopy) {
   ASSERT_FALSE(build_dir().empty()) << "ctest sets SWIVEL_BUILD_DIR";
-  EXPECT_EQ(shipped_config_dir_for("/usr/bin/swivel-lab"), SWIVEL_INSTALLED_CONFIG_DIR);
+  EXPECT_EQ(shipped_config_dir_for(std::string(SWIVEL_INSTALLED_BIN_DIR) + "/swivel-lab"),
+            SWIVEL_INSTALLED_CONFIG_DIR);
+  EXPECT_EQ(shipped_config_dir_for("/opt/elsewhere/bin/swivel-lab"), SWIVEL_INSTALLED_CONFIG_DIR);
   // A sibling whose name merely starts like the build directory is not inside it.
   EXPECT_EQ(shipped_config_dir_for(build_dir() + "-other/bin/swivel-lab"),
             SWIVEL_INSTALLED_CONFIG_DIR);
+}
+
+// The Debian packages install /usr/bin and /etc/swivel whatever the configured prefix: for a
+// /usr build that is the configured layout, for a /usr/local one the package's own.
+TEST(ShippedConfig, PackagedExecutablesUseTheConfigurationInEtc) {
+  const std::filesystem::path expected = std::string_view(SWIVEL_INSTALLED_BIN_DIR) == "/usr/bin"
+                                             ? SWIVEL_INSTALLED_CONFIG_DIR
+                                             : "/etc/swivel";
+  EXPECT_EQ(shipped_config_dir_for("/usr/bin/swivel-lab"), expected);
+  EXPECT_EQ(shipped_config_dir_for("/usr/bin/../bin/swivelctl"), expected);
 }
 
 TEST(ShippedConfig, ThisTestFindsTheRepositoryFromAnyWorkingDirectory) {

@@ -18,6 +18,12 @@ std::filesystem::path shipped_config_dir_for(const std::filesystem::path& execut
   if (is_under(executable, build_dir) || is_under(executable, SWIVEL_BUILD_DIR)) {
     return SWIVEL_SOURCE_CONFIG_DIR;
   }
+  // The Debian packages put the executables in /usr/bin and the configuration in /etc/swivel
+  // whatever prefix the build was configured with (services/CMakeLists.txt).
+  const std::filesystem::path dir = executable.lexically_normal().parent_path();
+  if (dir != std::filesystem::path(SWIVEL_INSTALLED_BIN_DIR) && dir == "/usr/bin") {
+    return "/etc/swivel";
+  }
   return SWIVEL_INSTALLED_CONFIG_DIR;
 }
 
