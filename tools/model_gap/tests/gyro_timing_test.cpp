@@ -14,6 +14,7 @@
 #include "gap_fixtures.hpp"
 #include "swivel/model_gap/run_log_adapter.hpp"
 #include "swivel/model_gap/sensor_replay.hpp"
+#include "swivel/model_gap/workflow.hpp"
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
@@ -37,6 +38,18 @@ RobotModel hidden_truth(const RobotModel& nominal) {
   truth.effects["wheel_radius"]["left_scale"] = kLeftScale;
   truth.effects["wheel_radius"]["right_scale"] = kRightScale;
   return truth;
+}
+
+double value_of(const FittedEffect& e, const std::string& key, double& sigma) {
+  const auto it = std::find(e.keys.begin(), e.keys.end(), key);
+  if (it == e.keys.end()) {
+    ADD_FAILURE() << e.name << " has no " << key;
+    sigma = 0.0;
+    return std::nan("");
+  }
+  const auto i = static_cast<std::size_t>(it - e.keys.begin());
+  sigma = e.sigmas[i];
+  return e.values[i];
 }
 
 TEST(GyroTiming, TheRecorderWritesTheReadingAtEachRowUndeclared) {
@@ -63,7 +76,7 @@ HeadingError heading_error(const RobotModel& nominal, const RobotModel& truth, c
   const RunData run = to_run_data(log);
   const SensorReplay replay(nominal, run, 1.0);
   std::vector<Pose2> path;
-  replay.path(sim::resolve_plant(truth), path);
+  replay.path(sim::resolve_plant(truth), TruthNuisance{}, path);
   HeadingError e;
   double previous = 0.0;
   double sum = 0.0;
@@ -97,6 +110,40 @@ TEST(GyroTiming, ReadingsAtTheRowsIntegrateByTheTrapezoid) {
   const HeadingError means = heading_error(nominal, truth, as_means);
   EXPECT_GT(means.max_row_jump, 1.5 * trapezoid.max_row_jump);
   EXPECT_LT(trapezoid.rms, 0.5 * means.rms) << trapezoid.rms << " vs " << means.rms;
+}
+
+// Issue: the default docent (no limits), a gyro bias and +-0.2 % wheel radii hidden in its true
+// model, recorded as swiveld records; with gyro[k] taken as the row's mean the sensor question
+// answered "unexplained: dyaw_gyro isolated jumps". The trapezoid of the readings names both
+// effects: the bias within 3 sigma of the truth, each radius within a quarter of its hidden
+// error (0.05 %) (on 8 seeds the left radius fell 1.1 to 4.4 of its stated sigmas from the truth,
+// the bias within 0.7: the radii's stated sigma is too small, the workflow's to answer). Two
+// minutes of the figure: on one minute the +-0.2 % radii are not significant yet.
+TEST(GyroTiming, ARunRecordedLikeTheDaemonNamesGyroBiasAndWheelRadius) {
+  const RobotModel nominal = testing::robot("docent");
+  ASSERT_FALSE(nominal.limits.any());
+  // The script's steps 3.7 ms into their rows, as in the issue's recording.
+  const RunLog log =
+      testing::record_like_swiveld(nominal, hidden_truth(nominal), figure(), 120.0, 5, 0.0037);
+  const GapResult r = analyse_gap(nominal, to_run_data(log));
+  ASSERT_EQ(r.sensor.verdict, Verdict::kNamed) << r.sensor.summary;
+  std::vector<std::string> names;
+  for (const FittedEffect& e : r.sensor.named) names.push_back(e.name);
+  std::sort(names.begin(), names.end());
+  ASSERT_EQ(names, (std::vector<std::string>{"gyro_bias", "wheel_radius"})) << r.sensor.summary;
+  for (const FittedEffect& e : r.sensor.named) {
+    double sigma = 0.0;
+    if (e.name == "gyro_bias") {
+      const double bias = value_of(e, "bias_rad_s", sigma);
+      EXPECT_LT(std::abs(bias - kGyroBiasRadps), 3.0 * sigma) << bias << " +- " << sigma;
+    } else {
+      constexpr double kRadiusTolerance = 0.25 * (kRightScale - kLeftScale) / 2.0;
+      const double left = value_of(e, "left_scale", sigma);
+      EXPECT_LT(std::abs(left - kLeftScale), kRadiusTolerance) << left << " +- " << sigma;
+      const double right = value_of(e, "right_scale", sigma);
+      EXPECT_LT(std::abs(right - kRightScale), kRadiusTolerance) << right << " +- " << sigma;
+    }
+  }
 }
 
 }  // namespace
