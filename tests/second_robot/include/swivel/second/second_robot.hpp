@@ -1,0 +1,163 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// A second robot generator for validating the model-gap workflow, built to differ from
+// Swivel's simulator and from tests/independent_robot where it matters: force-based contact
+// (creep with saturation, lateral as well as longitudinal), caster steering axes with inertia,
+// Coulomb friction and a servo, implicit rigid-body dynamics, motion capture with its own
+// latency and a marker offset, its own robots (3, 4 and 6 casters; differential robots of
+// other tracks and radii), encoder resolutions, row rates of 20-100 Hz, drive scripts and
+// controller. It shares no code with plugins/, tools/model_gap/, tools/lab/ or
+// tests/independent_robot and writes its files itself. README.md has the physics.
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace swivel::second {
+
+enum class Drive { kDifferential, kSwpc };
+
+/// One caster module: steering axis position (robot frame), trail and wheel radius.
+struct CasterModule {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double caster_offset_m = 0.0;
+  double wheel_radius_m = 0.0;
+};
+
+/// A robot as its nominal model states it, plus the physical figures the model has no keys for.
+struct Design {
+  std::string name;
+  Drive drive = Drive::kDifferential;
+  double wheel_radius_left_m = 0.0;  ///< differential
+  double wheel_radius_right_m = 0.0;
+  double track_width_m = 0.0;
+  std::vector<CasterModule> modules;  ///< swpc
+  double wheel_counts_per_rev = 0.0;
+  double steering_counts_per_rev = 0.0;  ///< swpc
+  double gyro_noise_rad_s = 0.0;
+  double mocap_position_noise_m = 0.0;
+  double mocap_yaw_noise_rad = 0.0;
+  double mocap_rate_hz = 0.0;
+  double linear_accel_limit_mps2 = 0.0;  ///< the robot's own controller, per axis
+  double angular_accel_limit_radps2 = 0.0;
+  double steering_rate_limit_radps = 0.0;  ///< swpc
+  double max_speed_mps = 0.0;              ///< what the drive scripts ask for at most
+  double max_yaw_rate_radps = 0.0;
+  double mass_kg = 0.0;
+  double yaw_inertia_kgm2 = 0.0;
+  [[nodiscard]] std::size_t wheel_count() const {
+    return drive == Drive::kDifferential ? 2U : modules.size();
+  }
+};
+
+/// The robots: "trike3", "cart4", "hex6" (swpc) and "mini_diff", "wide_diff", "mid_diff".
+std::vector<std::string> design_names();
+/// @throws std::invalid_argument naming the known designs.
+Design design(const std::string& name);
+
+/// What the true robot is. Library effects (the workflow's names) first, at identity values
+/// for the nominal robot; then physics the library has no name for; then the motion capture's
+/// own mounting and timing, which the workflow fits as nuisances and never names.
+struct Truth {
+  double gyro_bias_rad_s = 0.0;
+  double gyro_scale = 1.0;
+  std::vector<double> wheel_radius_scale;   ///< per wheel (differential: left, right); empty: 1
+  double track_width_scale = 1.0;           ///< differential
+  std::vector<double> caster_offset_scale;  ///< per module; empty: 1
+  std::vector<double> steering_offset_rad;  ///< per module, added to the nominal 0
+  double sensor_delay_s = 0.0;              ///< encoders and gyro report the state of then
+  double actuator_lag_s = 0.0;              ///< wheel and steering rate setpoints lag
+  double steering_lag_s = 0.0;              ///< swpc: steering setpoints only (replaces the above)
+  double steering_rate_limit_radps = 0.0;   ///< the robot's clamp; 0: the design's
+  double linear_accel_limit_mps2 = 0.0;     ///< the robot's controller; 0: the design's
+  double angular_accel_limit_radps2 = 0.0;
+  // Outside the library.
+  double tyre_stiffness_per_load = 400.0;  ///< creep stiffness, newtons per unit slip per newton
+  double friction_coefficient = 0.9;       ///< saturation of the contact force
+  double steering_friction_nm = 0.01;      ///< Coulomb friction of each steering axis
+  // Motion capture: its own latency and where the tracked body sits on the robot.
+  double mocap_latency_s = 0.0;
+  double marker_x_m = 0.0;  ///< lever arm, robot frame
+  double marker_y_m = 0.0;
+  double marker_yaw_rad = 0.0;
+};
+
+/// The gear ratio of ModelStatement::fractional_counts.
+inline constexpr double kFractionalGear = 1.37;
+
+/// What the nominal model file states under `limits:`.
+struct ModelStatement {
+  bool accel_limits = true;
+  bool steering_rate_limit = true;  ///< swpc
+  /// Counts per revolution written as the real numbers of a geared encoder (the design's
+  /// counts times 1.37); off until the robot model reads real-valued counts.
+  bool fractional_counts = false;
+};
+
+enum class Script {
+  kWaypoints,  ///< random waypoints, turn then drive (differential) or drive while turning
+  kCircles,    ///< circles of several radii, both ways
+  kSpotTurns,  ///< turns on the spot with short drives between
+  kMixed,      ///< a random mixture of the three
+};
+const char* script_name(Script s);
+
+struct RunSpec {
+  std::string design = "cart4";
+  Truth truth;
+  ModelStatement model;
+  Script script = Script::kMixed;
+  double row_rate_hz = 50.0;  ///< 20 to 100
+  double duration_s = 90.0;
+  std::uint64_t seed = 1;
+  bool noise = true;
+};
+
+/// One library effect the workflow should name, with every parameter (workflow key names;
+/// limits under the effect names `accel_limit` and `steering_rate_limit`).
+struct ExpectedEffect {
+  std::string effect;
+  std::vector<std::pair<std::string, double>> params;
+};
+
+/// The library effects in which the true robot differs from what its model states.
+std::vector<ExpectedEffect> expected_effects(const RunSpec& spec);
+
+struct GeneratedRun {
+  std::string run_csv;
+  std::string nominal_model_yaml;
+  std::vector<ExpectedEffect> expected;
+};
+
+/// Simulates and writes both files. Deterministic per spec.
+/// @throws std::invalid_argument naming a bad field of the spec.
+GeneratedRun generate(const RunSpec& spec);
+
+/// Sets a truth field from "NAME.PARAM=VALUE" in the workflow's effect names (e.g.
+/// "wheel_radius.module_2_scale=1.01", "accel_limit.linear_mps2=0.3") or the generator's own
+/// (e.g. "tyre.stiffness_per_load=20", "mocap.latency_s=0.01", "mocap.marker_x_m=0.05").
+/// @throws std::invalid_argument naming the problem.
+void set_truth(RunSpec& spec, const std::string& assignment);
+
+// The simulated record, for tests: rows as written, with the truth beside them.
+struct Row {
+  double t_s = 0.0;
+  double cmd[3] = {0, 0, 0};
+  std::vector<double> wheel_rad;  ///< encoder readings
+  std::vector<double> steer_rad;  ///< swpc, wrapped to (-pi, pi]
+  double gyro_radps = 0.0;
+  bool has_mocap = false;
+  double mocap[3] = {0, 0, 0};
+  // Truth at t (not written).
+  double pose[3] = {0, 0, 0};
+  double twist[3] = {0, 0, 0};            ///< body frame
+  std::vector<double> true_wheel_rad;     ///< wheel angles
+  std::vector<double> true_steer_rad;     ///< true steering angles (unwrapped)
+  std::vector<double> contact_speed_mps;  ///< ground speed of each contact along its heading
+  std::vector<double> contact_travel_m;  ///< its integral since the start
+};
+std::vector<Row> simulate(const RunSpec& spec);
+
+}  // namespace swivel::second

@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The validation runs of swivel-bench-model-gap: drawn from seed ranges that were never used
+// while the model-gap workflow or this generator was developed (tools/lab/GAP.md
+// "Validation on runs made another way"). Each case is a function of its seed alone. The
+// smoke range serves `--quick` and the tests, so that a look at a smoke run never sees a
+// validation run.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "swivel/second/second_robot.hpp"
+
+namespace swivel::second {
+
+enum class CaseKind {
+  kClean,    ///< the true robot is what its model states (motion capture mounted anyhow)
+  kLibrary,  ///< one effect of the workflow's library
+  kOutside,  ///< a slippery floor: the contacts saturate, which the library has no name for
+};
+const char* case_kind_name(CaseKind kind);
+
+struct ValidationCase {
+  std::string id;  ///< e.g. "clean/7340001"
+  CaseKind kind = CaseKind::kClean;
+  std::string description;  ///< robot, rate, script, what is hidden
+  RunSpec spec;
+  std::vector<ExpectedEffect> expected;  ///< library effects a correct workflow names
+};
+
+// Validation seed ranges (first seed; case i has first + i). Never used while developing.
+inline constexpr std::uint64_t kValidationCleanSeed = 7340001;
+inline constexpr std::uint64_t kValidationLibrarySeed = 7350001;
+inline constexpr std::uint64_t kValidationOutsideSeed = 7360001;
+inline constexpr std::size_t kValidationCleanRuns = 240;
+inline constexpr std::size_t kValidationLibraryRuns = 68;  ///< 4 of each robot-effect pair
+inline constexpr std::size_t kValidationOutsideRuns = 12;
+// Smoke seeds (tests, --quick): a different range, so that looking at them reveals nothing of
+// the validation runs.
+inline constexpr std::uint64_t kSmokeCleanSeed = 5001;
+inline constexpr std::uint64_t kSmokeLibrarySeed = 6001;
+inline constexpr std::uint64_t kSmokeOutsideSeed = 6501;
+
+inline constexpr double kValidationDurationS = 80.0;
+
+/// One case of each kind, from its seed (and its index within the range, which spreads the
+/// cases evenly over robots and effects).
+ValidationCase clean_case(std::uint64_t first_seed, std::size_t index);
+ValidationCase library_case(std::uint64_t first_seed, std::size_t index);
+ValidationCase outside_case(std::uint64_t first_seed, std::size_t index);
+
+/// The effects library_case cycles through, as "robot kind/effect" pairs (17).
+std::vector<std::string> library_case_effects();
+
+/// The whole validation set (counts as above), or the smoke set with `smoke`.
+std::vector<ValidationCase> validation_set(bool smoke, std::size_t clean, std::size_t library,
+                                           std::size_t outside);
+
+}  // namespace swivel::second

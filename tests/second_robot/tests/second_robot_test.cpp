@@ -1,0 +1,351 @@
+// SPDX-License-Identifier: Apache-2.0
+// The second robot generator against closed forms and the project's readers: its files parse
+// with swivel::parse_run_log and swivel::parse_robot_model, the sensors are what README.md
+// says they are, stiff tyres roll without measurable slip and a slippery floor does not, and
+// the validation set spans what the benchmark's targets require.
+
+#include "swivel/second/second_robot.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "swivel/robot_model_io.hpp"
+#include "swivel/run_log.hpp"
+#include "swivel/second/validation_set.hpp"
+
+namespace swivel::second {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+RunSpec short_run(const std::string& robot, double rate, std::uint64_t seed) {
+  RunSpec s;
+  s.design = robot;
+  s.row_rate_hz = rate;
+  s.duration_s = 25.0;
+  s.seed = seed;
+  return s;
+}
+
+TEST(SecondRobotFiles, ReadBackWithTheProjectsReaders) {
+  const double rates[] = {20, 37, 50, 64, 80, 100};
+  std::size_t k = 0;
+  for (const std::string& name : design_names()) {
+    const RunSpec spec = short_run(name, rates[k++ % 6], 11);
+    const GeneratedRun run = generate(spec);
+    std::istringstream csv(run.run_csv);
+    const RunLog log = parse_run_log(csv, name + ".csv");
+    const Design d = design(name);
+    EXPECT_EQ(log.header.robot, name);
+    EXPECT_EQ(log.header.drivetrain == DrivetrainKind::kSwpc, d.drive == Drive::kSwpc);
+    EXPECT_EQ(log.header.module_count, d.wheel_count());
+    const double expected_rows = spec.duration_s * spec.row_rate_hz;
+    EXPECT_NEAR(static_cast<double>(log.samples.size()), expected_rows, 2.0) << name;
+    std::size_t truth = 0;
+    for (std::size_t i = 1; i < log.samples.size(); ++i) {
+      const double dt = log.samples[i].t_s - log.samples[i - 1].t_s;
+      EXPECT_NEAR(dt, 1.0 / spec.row_rate_hz, 0.001) << name << " row " << i;
+      truth += log.samples[i].has_truth ? 1 : 0;
+    }
+    const double share = std::min(1.0, d.mocap_rate_hz / spec.row_rate_hz);
+    EXPECT_NEAR(static_cast<double>(truth) / static_cast<double>(log.samples.size()), share, 0.03)
+        << name;
+
+    const RobotModel model = parse_robot_model(run.nominal_model_yaml, name + ".yaml");
+    EXPECT_EQ(model.name, name);
+    EXPECT_EQ(model.module_count(), d.wheel_count());
+    EXPECT_DOUBLE_EQ(static_cast<double>(model.sensors.wheel_encoder_counts_per_rev),
+                     d.wheel_counts_per_rev);
+    EXPECT_DOUBLE_EQ(model.sensors.gyro.noise_rad_s, d.gyro_noise_rad_s);
+    EXPECT_DOUBLE_EQ(model.sensors.motion_capture.position_noise_m, d.mocap_position_noise_m);
+    ASSERT_TRUE(model.limits.linear_acceleration_mps2.has_value());
+    EXPECT_DOUBLE_EQ(*model.limits.linear_acceleration_mps2, d.linear_accel_limit_mps2);
+    if (d.drive == Drive::kSwpc) {
+      for (std::size_t i = 0; i < d.modules.size(); ++i) {
+        EXPECT_DOUBLE_EQ(model.modules[i].x_m, d.modules[i].x_m);
+        EXPECT_DOUBLE_EQ(model.modules[i].caster_offset_m, d.modules[i].caster_offset_m);
+      }
+      EXPECT_DOUBLE_EQ(*model.limits.steering_rate_radps, d.steering_rate_limit_radps);
+    } else {
+      EXPECT_DOUBLE_EQ(model.differential.track_width_m, d.track_width_m);
+      EXPECT_FALSE(model.limits.steering_rate_radps.has_value());
+    }
+    EXPECT_TRUE(model.effects.empty());
+  }
+}
+
+TEST(SecondRobotFiles, ModelWithoutLimitsAndFractionalCounts) {
+  RunSpec spec = short_run("hex6", 50, 3);
+  spec.model.accel_limits = false;
+  spec.model.steering_rate_limit = false;
+  const RobotModel model = parse_robot_model(generate(spec).nominal_model_yaml, "hex6.yaml");
+  EXPECT_FALSE(model.limits.any());
+  spec.model.fractional_counts = true;
+  const std::string yaml = generate(spec).nominal_model_yaml;
+  EXPECT_NE(yaml.find("wheel_encoder_counts_per_rev: 22446.08"), std::string::npos) << yaml;
+  using Counts = decltype(SensorParams::wheel_encoder_counts_per_rev);
+  if constexpr (std::is_floating_point_v<Counts>) {
+    const RobotModel geared = parse_robot_model(yaml, "hex6.yaml");
+    EXPECT_DOUBLE_EQ(static_cast<double>(geared.sensors.wheel_encoder_counts_per_rev),
+                     16384 * kFractionalGear);
+  } else {
+    EXPECT_THROW((void)parse_robot_model(yaml, "hex6.yaml"), std::exception);
+  }
+}
+
+TEST(SecondRobotFiles, SameSpecSameBytes) {
+  const RunSpec spec = short_run("trike3", 45, 5);
+  EXPECT_EQ(generate(spec).run_csv, generate(spec).run_csv);
+  RunSpec other = spec;
+  other.seed = 6;
+  EXPECT_NE(generate(spec).run_csv, generate(other).run_csv);
+}
+
+TEST(SecondRobotSensors, GyroIsTheRateAtTheRowsTime) {
+  RunSpec spec = short_run("mid_diff", 50, 7);
+  spec.noise = false;
+  set_truth(spec, "gyro_scale.scale=1.02");
+  set_truth(spec, "gyro_bias.bias_rad_s=0.005");
+  double max_rate = 0;
+  for (const Row& r : simulate(spec)) {
+    EXPECT_NEAR(r.gyro_radps, 1.02 * r.twist[2] + 0.005, 1e-12);
+    max_rate = std::max(max_rate, std::abs(r.twist[2]));
+  }
+  EXPECT_GT(max_rate, 0.3);  // the run turns
+}
+
+TEST(SecondRobotSensors, EncodersAreQuantizedAndLate) {
+  RunSpec spec = short_run("cart4", 100, 8);
+  spec.noise = false;
+  set_truth(spec, "sensor_latency.delay_s=0.05");
+  set_truth(spec, "steering_offset.module_3_rad=0.02");
+  const std::vector<Row> rows = simulate(spec);
+  const double wheel_step = 2 * kPi / 8192, steer_step = 2 * kPi / 2000;
+  for (std::size_t j = 5; j < rows.size(); ++j) {
+    for (std::size_t i = 0; i < 4; ++i) {
+      const double counts = rows[j].wheel_rad[i] / wheel_step;
+      EXPECT_NEAR(counts, std::round(counts), 1e-6);
+      // The reading is the angle of 0.05 s (5 rows) ago, rounded down to a count.
+      const double late = rows[j - 5].true_wheel_rad[i];
+      EXPECT_LE(rows[j].wheel_rad[i], late + 1e-9);
+      EXPECT_GT(rows[j].wheel_rad[i], late - wheel_step - 1e-6);
+      const double offset = i == 2 ? 0.02 : 0.0;
+      const double steer = std::remainder(rows[j - 5].true_steer_rad[i] - offset, 2 * kPi);
+      EXPECT_LE(std::abs(std::remainder(rows[j].steer_rad[i] - steer, 2 * kPi)), steer_step + 1e-6);
+      EXPECT_LE(std::abs(rows[j].steer_rad[i]), kPi);
+    }
+  }
+}
+
+TEST(SecondRobotSensors, MotionCaptureSeesTheMarkerLate) {
+  RunSpec spec = short_run("wide_diff", 100, 9);
+  spec.noise = false;
+  set_truth(spec, "mocap.latency_s=0.03");
+  set_truth(spec, "mocap.marker_x_m=0.05");
+  set_truth(spec, "mocap.marker_y_m=-0.02");
+  set_truth(spec, "mocap.marker_yaw_rad=0.04");
+  const std::vector<Row> rows = simulate(spec);
+  std::size_t checked = 0;
+  for (std::size_t j = 3; j < rows.size(); ++j) {
+    if (!rows[j].has_mocap) continue;
+    const double* p = rows[j - 3].pose;  // 0.03 s earlier at 100 Hz
+    const double c = std::cos(p[2]), s = std::sin(p[2]);
+    EXPECT_NEAR(rows[j].mocap[0], p[0] + 0.05 * c + 0.02 * s, 2e-4);
+    EXPECT_NEAR(rows[j].mocap[1], p[1] + 0.05 * s - 0.02 * c, 2e-4);
+    EXPECT_NEAR(std::remainder(rows[j].mocap[2] - p[2] - 0.04, 2 * kPi), 0.0, 2e-4);
+    ++checked;
+  }
+  EXPECT_GT(checked, rows.size() * 9 / 10);
+}
+
+// Ground covered by each contact against what its wheel turned (r dpsi), over the run.
+double worst_slip_share(const RunSpec& spec) {
+  const Design d = design(spec.design);
+  const std::vector<Row> rows = simulate(spec);
+  double worst = 0;
+  for (std::size_t i = 0; i < d.wheel_count(); ++i) {
+    const double r = d.drive == Drive::kSwpc
+                         ? d.modules[i].wheel_radius_m
+                         : (i == 0 ? d.wheel_radius_left_m : d.wheel_radius_right_m);
+    double ground = 0, rolled = 0, path = 0;
+    for (std::size_t j = 1; j < rows.size(); ++j) {
+      const double g = rows[j].contact_travel_m[i] - rows[j - 1].contact_travel_m[i];
+      ground += g;
+      path += std::abs(g);
+      rolled += r * (rows[j].true_wheel_rad[i] - rows[j - 1].true_wheel_rad[i]);
+    }
+    EXPECT_GT(path, 1.0) << spec.design << " wheel " << i;
+    worst = std::max(worst, std::abs(rolled - ground) / path);
+  }
+  return worst;
+}
+
+TEST(SecondRobotPhysics, StiffTyresRollWithoutMeasurableSlip) {
+  for (const char* name : {"trike3", "hex6", "mini_diff", "wide_diff"}) {
+    RunSpec spec = short_run(name, 100, 12);
+    spec.duration_s = 40;
+    spec.noise = false;
+    EXPECT_LT(worst_slip_share(spec), 3e-4) << name;
+  }
+}
+
+TEST(SecondRobotPhysics, SlipperyFloorLosesGround) {
+  RunSpec spec = short_run("mid_diff", 100, 12);
+  spec.duration_s = 40;
+  spec.noise = false;
+  set_truth(spec, "tyre.friction=0.01");
+  set_truth(spec, "tyre.stiffness_per_load=10");
+  EXPECT_GT(worst_slip_share(spec), 0.01);
+}
+
+TEST(SecondRobotPhysics, CastersSwingByTheNoSlipLaw) {
+  // A powered caster's servo turns it at (n . v_s) / d - w, the rate at which its contact
+  // point does not slide sideways; with stiff tyres the steering follows that law.
+  RunSpec spec = short_run("trike3", 100, 13);
+  spec.noise = false;
+  const Design d = design("trike3");
+  const std::vector<Row> rows = simulate(spec);
+  double worst = 0;
+  std::size_t checked = 0;
+  for (std::size_t j = 1; j < rows.size(); ++j) {
+    const Row& a = rows[j - 1];
+    const Row& b = rows[j];
+    const double dt = b.t_s - a.t_s;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const CasterModule& m = d.modules[i];
+      const double phi = 0.5 * (a.true_steer_rad[i] + b.true_steer_rad[i]);
+      double tw[3];
+      for (int k = 0; k < 3; ++k) tw[k] = 0.5 * (a.twist[k] + b.twist[k]);
+      const double sx = tw[0] - tw[2] * m.y_m, sy = tw[1] + tw[2] * m.x_m;
+      if (std::hypot(sx, sy) < 0.05) continue;
+      const double law = (-std::sin(phi) * sx + std::cos(phi) * sy) / m.caster_offset_m - tw[2];
+      if (std::abs(law) > 3.0) continue;  // swinging round at the clamp
+      const double rate = (b.true_steer_rad[i] - a.true_steer_rad[i]) / dt;
+      worst = std::max(worst, std::abs(rate - law));
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 500U);
+  EXPECT_LT(worst, 0.1);
+}
+
+TEST(SecondRobotPhysics, AccelerationStaysWithinTheRobotsLimit) {
+  RunSpec spec = short_run("mid_diff", 100, 14);
+  spec.noise = false;
+  set_truth(spec, "accel_limit.linear_mps2=0.3");
+  const std::vector<Row> rows = simulate(spec);
+  double worst = 0;
+  for (std::size_t j = 1; j < rows.size(); ++j) {
+    const double dt = rows[j].t_s - rows[j - 1].t_s;
+    worst = std::max(worst, std::abs(rows[j].twist[0] - rows[j - 1].twist[0]) / dt);
+  }
+  EXPECT_LT(worst, 0.3 * 1.05);
+  EXPECT_GT(worst, 0.25);
+}
+
+TEST(SecondRobotTruth, AssignmentsNameTheirProblem) {
+  RunSpec spec;
+  spec.design = "mini_diff";
+  try {
+    set_truth(spec, "caster_offset.module_1_scale=1.1");
+    FAIL() << "accepted a caster offset on a differential robot";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mini_diff"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(set_truth(spec, "gyro_bias.bias_rad_s=abc"), std::invalid_argument);
+  EXPECT_THROW(set_truth(spec, "wheel_radius.module_1_scale=1.01"), std::invalid_argument);
+  EXPECT_THROW((void)design("docent"), std::invalid_argument);
+  set_truth(spec, "wheel_radius.right_scale=1.01");
+  const auto expected = expected_effects(spec);
+  ASSERT_EQ(expected.size(), 1U);
+  EXPECT_EQ(expected[0].effect, "wheel_radius");
+  ASSERT_EQ(expected[0].params.size(), 2U);
+  EXPECT_EQ(expected[0].params[1].first, "right_scale");
+  EXPECT_DOUBLE_EQ(expected[0].params[1].second, 1.01);
+  spec.row_rate_hz = 200;
+  EXPECT_THROW((void)simulate(spec), std::invalid_argument);
+}
+
+TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
+  const std::vector<ValidationCase> set =
+      validation_set(false, kValidationCleanRuns, kValidationLibraryRuns, kValidationOutsideRuns);
+  std::set<std::string> robots;
+  std::set<bool> swpc;
+  std::set<std::uint64_t> seeds;
+  double low = 1000, high = 0;
+  std::size_t clean = 0;
+  std::set<std::string> effects;
+  for (const ValidationCase& c : set) {
+    EXPECT_GE(c.spec.seed, 7000000U) << c.id;  // the development runs' seeds are far below
+    EXPECT_TRUE(seeds.insert(c.spec.seed).second) << c.id;
+    if (c.kind == CaseKind::kClean) {
+      ++clean;
+      EXPECT_TRUE(c.expected.empty()) << c.id;
+      robots.insert(c.spec.design);
+      swpc.insert(design(c.spec.design).drive == Drive::kSwpc);
+      low = std::min(low, c.spec.row_rate_hz);
+      high = std::max(high, c.spec.row_rate_hz);
+    } else if (c.kind == CaseKind::kLibrary) {
+      ASSERT_EQ(c.expected.size(), 1U) << c.id;
+      effects.insert(c.expected[0].effect);
+    } else {
+      EXPECT_TRUE(c.expected.empty()) << c.id;
+    }
+  }
+  EXPECT_GE(clean, 200U);
+  EXPECT_EQ(robots.size(), 6U);
+  EXPECT_EQ(swpc.size(), 2U);
+  EXPECT_LE(low, 25.0);
+  EXPECT_GE(high, 95.0);
+  EXPECT_EQ(effects.size(), 11U);
+  // The smoke set is another range.
+  for (const ValidationCase& c : validation_set(true, 10, 17, 3)) {
+    EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
+  }
+}
+
+}  // namespace
+}  // namespace swivel::second
+
+namespace swivel::second {
+namespace {
+
+// A clean run is the nominal robot: what its physics has beyond the model (creep, caster
+// servo, scrub when the casters swing round) must stay far below the motion capture's noise.
+// Checked on the smoke range, window by window: ground lost by any wheel in one second.
+TEST(SecondRobotValidationSet, CleanRunsSlipLessThanTheNoise) {
+  for (std::size_t index : {0U, 1U, 3U, 7U}) {
+    RunSpec spec = clean_case(kSmokeCleanSeed, index).spec;
+    spec.noise = false;
+    const Design d = design(spec.design);
+    const std::vector<Row> rows = simulate(spec);
+    std::vector<double> lost(d.wheel_count(), 0.0);
+    double window_start = 0.0, worst = 0.0;
+    for (std::size_t j = 1; j < rows.size(); ++j) {
+      for (std::size_t i = 0; i < d.wheel_count(); ++i) {
+        const double r = d.drive == Drive::kSwpc
+                             ? d.modules[i].wheel_radius_m
+                             : (i == 0 ? d.wheel_radius_left_m : d.wheel_radius_right_m);
+        lost[i] += r * (rows[j].true_wheel_rad[i] - rows[j - 1].true_wheel_rad[i]) -
+                   (rows[j].contact_travel_m[i] - rows[j - 1].contact_travel_m[i]);
+      }
+      if (rows[j].t_s - window_start >= 1.0) {
+        for (double& l : lost) {
+          worst = std::max(worst, std::abs(l));
+          l = 0.0;
+        }
+        window_start = rows[j].t_s;
+      }
+    }
+    EXPECT_LT(worst, 0.5 * d.mocap_position_noise_m) << spec.design << " seed " << spec.seed;
+  }
+}
+
+}  // namespace
+}  // namespace swivel::second

@@ -1,0 +1,129 @@
+// SPDX-License-Identifier: Apache-2.0
+// swivel-second-run: writes a run log and the nominal robot model from the second robot
+// generator (tests/second_robot/README.md), a run built on the command line or a case of the
+// validation (or smoke) set. Exit codes: 0 done, 1 a file could not be written, 2 usage error.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "swivel/cli/command_line.hpp"
+#include "swivel/second/second_robot.hpp"
+#include "swivel/second/validation_set.hpp"
+
+namespace {
+
+using namespace swivel::second;
+
+bool write(const std::string& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.close();
+  if (!f) {
+    std::fprintf(stderr, "swivel-second-run: cannot write %s\n", path.c_str());
+    return false;
+  }
+  return true;
+}
+
+std::string expected_text(const std::vector<ExpectedEffect>& expected) {
+  if (expected.empty()) return "no library effect (no significant gap)";
+  std::string s;
+  for (const auto& e : expected) {
+    for (const auto& [k, v] : e.params) {
+      s += (s.empty() ? "" : " ") + e.effect + "." + k + "=" + std::to_string(v);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"The second robot generator: a run log and its nominal model"};
+  std::string robot = "cart4";
+  std::vector<std::string> truth;
+  std::string script = "mixed";
+  double rate = 50.0;
+  double duration = 90.0;
+  std::uint64_t seed = 1;
+  bool no_accel = false, no_steer = false, fractional = false, no_noise = false;
+  std::string case_kind;
+  std::size_t index = 0;
+  bool validation_seeds = false;
+  std::string out, model_out;
+  app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff");
+  app.add_option("--true", truth, "NAME.PARAM=VALUE: the true robot (repeatable)");
+  app.add_option("--script", script, "waypoints, circles, spot_turns or mixed");
+  app.add_option("--rate", rate, "row rate, Hz (20-100)");
+  app.add_option("--duration", duration, "s");
+  app.add_option("--seed", seed);
+  app.add_flag("--no-accel-limits-in-model", no_accel, "the model states no acceleration limits");
+  app.add_flag("--no-steering-limit-in-model", no_steer, "the model states no steering rate limit");
+  app.add_flag("--fractional-counts", fractional,
+               "geared encoders: counts per revolution are not integers (needs a robot-model "
+               "reader with real-valued counts)");
+  app.add_flag("--no-noise", no_noise, "no sensor noise or clock jitter");
+  app.add_option("--case", case_kind, "a case of the smoke set: clean, library or outside");
+  app.add_option("--index", index, "with --case: its index");
+  app.add_flag("--validation-seeds", validation_seeds,
+               "with --case: from the validation set instead of the smoke set");
+  app.add_option("--out", out, "run log (CSV)")->required();
+  app.add_option("--model-out", model_out, "nominal model (YAML)");
+  if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;
+
+  RunSpec spec;
+  std::string description;
+  try {
+    if (!case_kind.empty()) {
+      ValidationCase c;
+      if (case_kind == "clean") {
+        c = clean_case(validation_seeds ? kValidationCleanSeed : kSmokeCleanSeed, index);
+      } else if (case_kind == "library") {
+        c = library_case(validation_seeds ? kValidationLibrarySeed : kSmokeLibrarySeed, index);
+      } else if (case_kind == "outside") {
+        c = outside_case(validation_seeds ? kValidationOutsideSeed : kSmokeOutsideSeed, index);
+      } else {
+        throw std::invalid_argument("--case " + case_kind + ": expected clean, library or outside");
+      }
+      spec = c.spec;
+      description = c.id + ": " + c.description;
+    } else {
+      spec.design = robot;
+      (void)design(robot);  // names the robots when unknown
+      const std::vector<std::string> scripts = {"waypoints", "circles", "spot_turns", "mixed"};
+      bool found = false;
+      for (std::size_t i = 0; i < scripts.size(); ++i) {
+        if (scripts[i] == script) {
+          spec.script = static_cast<Script>(i);
+          found = true;
+        }
+      }
+      if (!found) throw std::invalid_argument("--script " + script + ": unknown");
+      spec.row_rate_hz = rate;
+      spec.duration_s = duration;
+      spec.seed = seed;
+      spec.model.accel_limits = !no_accel;
+      spec.model.steering_rate_limit = !no_steer;
+      spec.model.fractional_counts = fractional;
+      spec.noise = !no_noise;
+      for (const auto& a : truth) set_truth(spec, a);
+      description = robot + ", seed " + std::to_string(seed);
+    }
+    const GeneratedRun run = generate(spec);
+    if (!write(out, run.run_csv)) return 1;
+    std::printf("wrote %s: %s\n", out.c_str(), description.c_str());
+    if (!model_out.empty()) {
+      if (!write(model_out, run.nominal_model_yaml)) return 1;
+      std::printf("wrote %s: the nominal model\n", model_out.c_str());
+    }
+    std::printf("expected: %s\n", expected_text(run.expected).c_str());
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "swivel-second-run: %s\n", e.what());
+    return swivel::cli::kUsageError;
+  }
+  return 0;
+}
