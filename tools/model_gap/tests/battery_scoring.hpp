@@ -1,21 +1,32 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Scoring the model-gap workflow on the independent battery (tests/independent_robot): each
-// case's run is generated, analysed as a user would (its run log and nominal model read
-// back from text), and the verdicts compared with what the generator hid. Shared by the
-// battery benchmark and the battery test so that both apply the same rules:
+// Scoring the model-gap workflow on runs whose truth is known: a result of analyse_gap is
+// compared with what the generator hid. Shared by the benchmark (development runs from
+// tests/independent_robot, validation runs from tests/second_robot) and the tests, so that all
+// apply the same rules:
 //   clean    both questions: no significant gap;
-//   single,  each question names exactly the hidden effects that belong to it (and sees no
-//   pair     gap when none does);
-//   outside  nothing is named by either question.
+//   library  each question names exactly the hidden effects that belong to it (and sees no
+//            gap when none does);
+//   outside  no library effect is named by either question, except those the case allows
+//            (a slippery floor may be named `slip`, the library's nearest law).
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "swivel/independent/battery.hpp"
 #include "swivel/model_gap/workflow.hpp"
 
 namespace swivel::model_gap::battery {
+
+enum class RunKind { kClean, kLibrary, kOutside };
+
+/// One hidden library effect with every parameter (the generators' key names; limits under
+/// `accel_limit` / `steering_rate_limit`).
+struct HiddenEffect {
+  std::string effect;
+  std::vector<std::pair<std::string, double>> params;
+};
 
 /// One hidden parameter against what the workflow fitted for it.
 struct ParamCheck {
@@ -31,7 +42,10 @@ struct ParamCheck {
 struct CaseOutcome {
   std::string id;
   std::string robot;
-  independent::CaseKind kind = independent::CaseKind::kClean;
+  RunKind kind = RunKind::kClean;
+  bool swpc = false;
+  double row_rate_hz = 0.0;            ///< from the run's median row interval
+  std::vector<std::string> tags;       ///< groups for breakdowns, e.g. "robot trike3"
   std::vector<std::string> hidden[2];  ///< per question (sensor, command): hidden effects
   std::vector<std::string> named[2];   ///< per question: named effects
   Verdict verdict[2] = {Verdict::kNoSignificantGap, Verdict::kNoSignificantGap};
@@ -46,12 +60,24 @@ struct CaseOutcome {
   double position_before_m[2] = {0, 0};    ///< final position error of each replay, before
   double position_after_m[2] = {0, 0};
   double wall_time_s = 0.0;
-  /// CPU time of the analysis (the workflow runs on one thread): the figure to hold against
-  /// the target when other work shares the machine.
-  double cpu_time_s = 0.0;
+  double cpu_time_s = 0.0;  ///< CPU time of this thread's analysis
+  std::string error;        ///< the workflow threw: its message (the case counts as wrong)
 };
 
-/// Generates and analyses one case.
+/// Scores `result` against what was hidden. `allowed_outside`: effects an outside case may
+/// name without being wrong.
+CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenEffect>& hidden,
+                  const GapResult& result, const std::vector<std::string>& allowed_outside = {});
+
+/// Reads the two files as a user would (the project's readers), analyses them and scores the
+/// result; a workflow that throws gives an outcome with `error` set and `correct` false.
+CaseOutcome analyse_and_score(const std::string& id, RunKind kind, const std::string& run_csv,
+                              const std::string& model_yaml,
+                              const std::vector<HiddenEffect>& hidden,
+                              const std::vector<std::string>& allowed_outside = {},
+                              const GapOptions& options = {});
+
+/// Generates and analyses one case of the independent battery (the development runs).
 CaseOutcome run_case(const independent::BatteryCase& c, const GapOptions& options = {});
 
 }  // namespace swivel::model_gap::battery

@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "validation_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace swivel::model_gap::validation {
+namespace {
+
+std::string percent(const Proportion& p) {
+  char buf[96];
+  if (p.n == 0) return "no runs";
+  const Interval ci = p.interval();
+  std::snprintf(buf, sizeof buf, "%zu/%zu = %.1f %% [%.1f, %.1f]", p.hits, p.n, 100.0 * p.value(),
+                100.0 * ci.low, 100.0 * ci.high);
+  return buf;
+}
+
+TargetResult proportion_target(const std::string& name, const Proportion& p, double low,
+                               double high) {
+  TargetResult t;
+  t.name = name;
+  char buf[64];
+  if (low <= 0.0) {
+    std::snprintf(buf, sizeof buf, "<= %.0f %%", 100.0 * high);
+  } else if (high >= 1.0) {
+    std::snprintf(buf, sizeof buf, ">= %.0f %%", 100.0 * low);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.0f-%.0f %%", 100.0 * low, 100.0 * high);
+  }
+  t.target = buf;
+  t.measured = percent(p);
+  const double v = p.value();
+  t.met = p.n > 0 && v >= low && v <= high;
+  const Interval ci = p.interval();
+  t.met_by_whole_interval = p.n > 0 && ci.low >= low && ci.high <= high;
+  return t;
+}
+
+}  // namespace
+
+Interval wilson_interval(std::size_t hits, std::size_t n, double z) {
+  if (n == 0) return {0.0, 1.0};
+  const double nn = static_cast<double>(n);
+  const double p = static_cast<double>(hits) / nn;
+  const double z2 = z * z;
+  const double centre = (p + z2 / (2 * nn)) / (1 + z2 / nn);
+  const double half = z * std::sqrt(p * (1 - p) / nn + z2 / (4 * nn * nn)) / (1 + z2 / nn);
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+double Proportion::value() const {
+  return n > 0 ? static_cast<double>(hits) / static_cast<double>(n)
+               : std::numeric_limits<double>::quiet_NaN();
+}
+
+SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
+  SetFigures f;
+  double total_cpu = 0.0;
+  f.slowest_clean_rate_hz = std::numeric_limits<double>::infinity();
+  for (const auto& o : outcomes) {
+    total_cpu += o.cpu_time_s;
+    f.worst_cpu_s = std::max(f.worst_cpu_s, o.cpu_time_s);
+    f.errors += o.error.empty() ? 0 : 1;
+    switch (o.kind) {
+      case battery::RunKind::kClean: {
+        const bool sensor = !o.error.empty() || o.verdict[0] != Verdict::kNoSignificantGap;
+        const bool command = !o.error.empty() || o.verdict[1] != Verdict::kNoSignificantGap;
+        f.false_alarm.add(sensor || command);
+        f.sensor_false_alarm.add(sensor);
+        f.command_false_alarm.add(command);
+        f.clean_robots.insert(o.robot);
+        (o.swpc ? f.clean_swpc : f.clean_differential) = true;
+        f.slowest_clean_rate_hz = std::min(f.slowest_clean_rate_hz, o.row_rate_hz);
+        f.fastest_clean_rate_hz = std::max(f.fastest_clean_rate_hz, o.row_rate_hz);
+        break;
+      }
+      case battery::RunKind::kLibrary:
+        f.named_right.add(o.correct && o.values_within_3_sigma);
+        for (const auto& p : o.params) {
+          if (!p.observable()) continue;
+          f.within_1_sigma.add(p.deviation() <= 1.0);
+          f.within_3_sigma.add(p.deviation() <= 3.0);
+        }
+        break;
+      case battery::RunKind::kOutside: f.outside_right.add(o.correct); break;
+    }
+  }
+  if (f.false_alarm.n == 0) f.slowest_clean_rate_hz = 0.0;
+  f.mean_cpu_s = outcomes.empty() ? 0.0 : total_cpu / static_cast<double>(outcomes.size());
+  return f;
+}
+
+std::vector<TargetResult> judge_targets(const SetFigures& f) {
+  std::vector<TargetResult> out;
+  out.push_back(proportion_target("false alarms, either question (clean runs)", f.false_alarm, 0.0,
+                                  kMaxFalseAlarmRate));
+  {
+    TargetResult t;
+    t.name = "clean runs span the targets' conditions";
+    char buf[160];
+    std::snprintf(
+        buf, sizeof buf, ">= %zu runs, both drivetrains, >= %zu robots, rows <= %.0f to >= %.0f Hz",
+        kMinCleanRuns, kMinCleanRobots, kSlowestRowRateAtMostHz, kFastestRowRateAtLeastHz);
+    t.target = buf;
+    std::snprintf(buf, sizeof buf, "%zu runs, %s%s, %zu robots, rows %.1f to %.1f Hz",
+                  f.false_alarm.n, f.clean_differential ? "differential" : "",
+                  f.clean_swpc ? (f.clean_differential ? " and swpc" : "swpc") : "",
+                  f.clean_robots.size(), f.slowest_clean_rate_hz, f.fastest_clean_rate_hz);
+    t.measured = buf;
+    t.met = f.false_alarm.n >= kMinCleanRuns && f.clean_differential && f.clean_swpc &&
+            f.clean_robots.size() >= kMinCleanRobots &&
+            f.slowest_clean_rate_hz <= kSlowestRowRateAtMostHz &&
+            f.fastest_clean_rate_hz >= kFastestRowRateAtLeastHz;
+    t.met_by_whole_interval = t.met;
+    out.push_back(t);
+  }
+  out.push_back(proportion_target("in-library effects named right, values within 3 sigma",
+                                  f.named_right, kMinNamedRight, 1.0));
+  out.push_back(proportion_target("coverage of the 1 sigma intervals", f.within_1_sigma,
+                                  kMinCoverage1Sigma, kMaxCoverage1Sigma));
+  out.push_back(proportion_target("coverage of the 3 sigma intervals", f.within_3_sigma,
+                                  kMinCoverage3Sigma, 1.0));
+  return out;
+}
+
+bool all_met(const std::vector<TargetResult>& results) {
+  return std::all_of(results.begin(), results.end(), [](const TargetResult& t) { return t.met; });
+}
+
+}  // namespace swivel::model_gap::validation
