@@ -49,8 +49,13 @@ int run_gap_cross(const GapCrossOptions& o) {
               << " % within 2 sigma of the others\n";
   }
   std::cout << "median ratio of the held-out RMS position gap (fitted / nominal) over " << r.pairs
-            << " pairs: " << std::setprecision(3) << r.median_ratio << "\n"
-            << "unexplained sensor verdicts: " << r.unexplained << " of " << r.fits.size()
+            << " pairs within sessions: " << std::setprecision(3) << r.median_ratio << "\n"
+            << "  over the " << r.pairs_named
+            << " pairs whose fit run named something: " << r.median_ratio_named << " ("
+            << 1000.0 * r.median_nominal_rms_m << " mm -> " << 1000.0 * r.median_fitted_rms_m
+            << " mm, medians)\n"
+            << "sensor verdicts: " << r.named << " named, " << r.no_gap << " no significant gap, "
+            << r.unexplained << " unexplained, of " << r.fits.size()
             << "; runs not used: " << r.skipped.size() << "\n"
             << "report: " << o.out_dir << "/cross_run.md\n";
   return 0;
@@ -75,7 +80,9 @@ void add_gap_cross_command(CLI::App& app, int& exit_code) {
                   "significance (normal deviates) an effect needs to be named")
       ->capture_default_str()
       ->check(CLI::Range(2.0, 20.0));
-  cmd->add_option("runs", options->run_files, "run logs (CSV) of one robot, at least two")
+  cmd->add_option("runs", options->run_files,
+                  "run logs (CSV) of one robot, at least two; a run is judged on the others in "
+                  "its folder (its session)")
       ->required()
       ->check(CLI::ExistingFile)
       ->expected(2, -1);

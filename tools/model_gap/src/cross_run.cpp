@@ -129,6 +129,12 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     tell("nominal gap of " + runs[k].source);
   }
   std::vector<double> ratios;
+  std::vector<double> ratios_named;
+  std::vector<double> nominal_named;
+  std::vector<double> fitted_named;
+  const auto session = [&runs](std::size_t k) {
+    return std::filesystem::path(runs[k].source).parent_path().string();
+  };
   for (std::size_t i = 0; i < n; ++i) {
     if (!usable[i]) {
       tell("skipped " + runs[i].source);
@@ -143,8 +149,10 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     f.truth = truth_nuisance_lines(fitted);
     f.fitted = fitted.sensor.verdict == Verdict::kNamed ? fitted.sensor.augmented : nominal;
     if (f.verdict == Verdict::kUnexplained) ++result.unexplained;
+    if (f.verdict == Verdict::kNamed) ++result.named;
+    if (f.verdict == Verdict::kNoSignificantGap) ++result.no_gap;
     for (std::size_t j = 0; j < n; ++j) {
-      if (j == i || !usable[j]) continue;
+      if (j == i || !usable[j] || session(j) != session(i)) continue;
       // A run that named nothing predicts the others exactly as the nominal model does.
       const double gap = f.named.empty() ? nominal_gap[j]
                                          : held_out_gap(f.fitted, runs[j], options).rms_position_m;
@@ -153,12 +161,21 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
       f.fitted_rms_m.push_back(gap);
       f.ratio.push_back(gap / nominal_gap[j]);
       ratios.push_back(f.ratio.back());
+      if (!f.named.empty()) {
+        ratios_named.push_back(f.ratio.back());
+        nominal_named.push_back(nominal_gap[j]);
+        fitted_named.push_back(gap);
+      }
     }
     result.fits.push_back(std::move(f));
     tell("fitted on " + runs[i].source);
   }
   result.pairs = ratios.size();
   result.median_ratio = median(ratios);
+  result.pairs_named = ratios_named.size();
+  result.median_ratio_named = median(ratios_named);
+  result.median_nominal_rms_m = median(nominal_named);
+  result.median_fitted_rms_m = median(fitted_named);
   result.agreement = agreement_of(result.fits);
   return result;
 }
@@ -172,6 +189,13 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
   j["model"] = nominal.source_file;
   j["median_ratio"] = r.median_ratio;
   j["pairs"] = r.pairs;
+  j["pairs_named"] = r.pairs_named;
+  j["median_ratio_named"] = r.median_ratio_named;
+  j["median_nominal_rms_position_m"] = r.median_nominal_rms_m;
+  j["median_fitted_rms_position_m"] = r.median_fitted_rms_m;
+  j["verdicts"] = {{"named", r.named},
+                   {"no significant gap", r.no_gap},
+                   {"unexplained residual", r.unexplained}};
   j["unexplained"] = r.unexplained;
   j["skipped"] = r.skipped;
   json fits = json::array();
@@ -224,9 +248,13 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
         "run beside the nominal model, each run with its own motion-capture nuisances fitted. "
         "The ratio is the whole-run RMS position gap with the fitted model over the gap with the "
         "nominal one (below 1: the fitted model predicts a run it has not seen better).\n\n"
-     << "Median ratio over " << r.pairs << " (fit run, other run) pairs: **"
-     << fmt(r.median_ratio, 3) << "**. Unexplained verdicts: " << r.unexplained << " of "
-     << r.fits.size() << ".\n\n"
+     << "Median ratio over " << r.pairs << " (fit run, other run of its session) pairs: **"
+     << fmt(r.median_ratio, 3) << "**; over the " << r.pairs_named
+     << " pairs whose fit run named something: **" << fmt(r.median_ratio_named, 3)
+     << "** (RMS position gap " << fmt(1000.0 * r.median_nominal_rms_m, 3) << " mm nominal, "
+     << fmt(1000.0 * r.median_fitted_rms_m, 3)
+     << " mm fitted, medians). Sensor verdicts: " << r.named << " named, " << r.no_gap
+     << " no significant gap, " << r.unexplained << " unexplained, of " << r.fits.size() << ".\n\n"
      << "| fitted on | verdict | named | median ratio on the others |\n|---|---|---|---|\n";
   for (const FitRun& f : r.fits) {
     std::string named;

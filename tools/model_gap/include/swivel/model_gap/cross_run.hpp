@@ -6,6 +6,8 @@
 // one, each with that run's own motion-capture nuisances fitted (they belong to the set-up, not
 // the robot), and the whole-run RMS position gap of the two is compared. Independently, the
 // values each run named are checked for agreement across runs within their stated sigmas.
+// Runs are judged only on runs of their own session: the folder their file is in (a session's
+// set-up, motion capture and floor are its own).
 
 #include <cstddef>
 #include <functional>
@@ -69,6 +71,14 @@ struct CrossRunResult {
   std::vector<ParameterAgreement> agreement;
   double median_ratio = 0.0;  ///< over every (fit run, other run) pair
   std::size_t pairs = 0;
+  /// Over the pairs whose fit run named something (the others predict exactly as the nominal
+  /// model does, ratio 1), and their whole-run RMS position gaps, nominal and fitted.
+  double median_ratio_named = 0.0;
+  std::size_t pairs_named = 0;
+  double median_nominal_rms_m = 0.0;
+  double median_fitted_rms_m = 0.0;
+  std::size_t named = 0;        ///< sensor verdicts "named"
+  std::size_t no_gap = 0;       ///< sensor verdicts "no significant gap"
   std::size_t unexplained = 0;  ///< sensor verdicts "unexplained residual"
 };
 
