@@ -33,9 +33,10 @@ RunData to_run_data(const RunLog& log) {
       d.wheel_rad[i].push_back(s.wheel_rad[i]);
       if (!d.steer_rad.empty()) {
         // Absolute steering encoders wrap to (-pi, pi]; the replays difference these.
-        const double phi = s.steer_rad[i];
-        d.steer_rad[i].push_back(d.steer_rad[i].empty() ? phi
-                                                        : unwrap_near(phi, d.steer_rad[i].back()));
+        std::vector<double>& steer = d.steer_rad[i];
+        double phi = s.steer_rad[i];
+        if (!steer.empty()) phi = unwrap_near(phi, steer.back());
+        steer.push_back(phi);
       }
     }
     d.gyro_radps.push_back(s.has_gyro ? s.gyro_wz_radps : kNaN);
