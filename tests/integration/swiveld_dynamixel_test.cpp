@@ -262,3 +262,41 @@ TEST(SwiveldDynamixel, ShutdownWithTorqueOffNotConfirmedExitsNonZero) {
   EXPECT_EQ(emulator.torque_enable(1), 0) << "the servo that answers is off";
   std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
 }
+
+// Every reply 3 ms slower from some time on (a busier adapter or host), with stale_timeout_s
+// 0.5 and corners after it: the plugin learns the new quickest exchange, so its readings keep
+// a known sampling time and the corners pass without an encoder-jump fault (with the
+// all-time quickest exchange, every later reading was untimed and the first corner faulted).
+TEST(SwiveldDynamixel, ALastingLatencyRiseTripsNoFaultAtTheCorners) {
+  dxl::Emulator emulator(servo_ids({1, 2}));
+  const std::string dir = make_test_dir("dxl_latency");
+  const std::string params = "{port: " + emulator.port() +
+                             ", reply_timeout_s: 0.2, stale_timeout_s: 0.5, left: {id: 1}, "
+                             "right: {id: 2, direction: -1}}";
+  const std::string config = write_config(dir, "docent", params,
+                                          "    - {vx_mps: 0.2, wz_radps: 0.6, duration_s: 2.5}\n"
+                                          "    - {vx_mps: 0.2, wz_radps: -0.6, duration_s: 1.0}\n"
+                                          "    - {vx_mps: 0.2, wz_radps: 0.6, duration_s: 1.0}\n"
+                                          "    - {vx_mps: 0.2, wz_radps: -0.6, duration_s: 1.0}\n"
+                                          "    - {vx_mps: 0.0, duration_s: 600}\n");
+  Child daemon(swiveld_exe(), {"--config", config, "--no-dds"});
+  ASSERT_FALSE(daemon.wait_for(1s)) << "exited early:\n" << daemon.err();
+  emulator.set_reply_delay(1, 0.003);
+  emulator.set_reply_delay(2, 0.003);
+  ASSERT_FALSE(daemon.wait_for(6s)) << "exited early:\n" << daemon.err();
+  const auto lines = status_lines(daemon.out());
+  ASSERT_GE(lines.size(), 40U) << daemon.out();
+  const StatusLine& last = lines.back();
+  EXPECT_NE(last.line.find("fault none"), std::string::npos) << last.line << "\n" << daemon.err();
+  EXPECT_EQ(daemon.err().find("encoder"), std::string::npos) << daemon.err();
+  // At rest, the heading from the encoders against the servos' own positions (the docent:
+  // wheel radius 0.075 m, track 0.40 m; the right servo mounted reversed).
+  const double left_rad = emulator.present_position(1) * 2.0 * M_PI / 4096.0;
+  const double right_rad = -emulator.present_position(2) * 2.0 * M_PI / 4096.0;
+  const double true_yaw = 0.075 * (right_rad - left_rad) / 0.40;
+  EXPECT_NEAR(last.yaw_rad, true_yaw, 0.01) << last.line;
+  EXPECT_GT(last.x_m, 0.3) << "it drove the corners: " << last.line;
+  daemon.signal(SIGTERM);
+  ASSERT_TRUE(daemon.wait_for(5s));
+  std::filesystem::remove_all(dir);  // kept when an assertion ends the test early
+}

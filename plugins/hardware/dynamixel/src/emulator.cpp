@@ -76,6 +76,10 @@ void Emulator::open_pty() {
     throw std::system_error(errno, std::generic_category(), "emulator: openpty");
   }
   fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK);
+  // Not inherited by a process the test starts (swiveld): a copy of the master there would
+  // keep the pty alive after disconnect().
+  fcntl(master, F_SETFD, FD_CLOEXEC);
+  fcntl(slave, F_SETFD, FD_CLOEXEC);
   termios master_tio{};
   tcgetattr(master, &master_tio);
   cfmakeraw(&master_tio);

@@ -112,6 +112,9 @@ ssize_t SerialPort::read_some(std::span<std::uint8_t> buffer, double timeout_s) 
     if (r == 0) return 0;
     if (r < 0 && errno != EINTR) return -1;
     if (r > 0 && (p.revents & (POLLERR | POLLNVAL)) != 0) return -1;
+    // A hang-up is a device gone (an unplugged USB adapter, a closed pty): an error, not a
+    // quiet line that would read as servos not answering.
+    if (r > 0 && (p.revents & POLLHUP) != 0 && (p.revents & POLLIN) == 0) return -1;
     timeout_s = 0.0;  // one wait; the caller loops against its own deadline
     if (r > 0 && (p.revents & POLLIN) == 0) return 0;
   }

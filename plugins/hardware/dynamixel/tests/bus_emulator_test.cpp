@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <thread>
@@ -184,4 +185,25 @@ TEST(DynamixelBus, TimedWireTakesTheBytesTime) {
   // Request 22 bytes + 8 replies of 19 bytes = 174 bytes of 10 bits at 57600 bit/s.
   EXPECT_GT(took, 174 * 10.0 / 57600 * 0.95);
   EXPECT_LT(took, 174 * 10.0 / 57600 + 0.02);
+}
+
+// An unplugged adapter reads as a port error, not as servos that stay silent: a request
+// waiting for its statuses when the device goes, and every one after.
+TEST(DynamixelBus, AHungUpPortIsAnErrorNotASilentServo) {
+  Rig rig;
+  std::array<dxl::SyncReply, 2> replies{};
+  const std::uint8_t ids[] = {1, 2};
+  ASSERT_TRUE(rig.bus.sync_read(dxl::address::kPresentPosition, 4, ids, replies, kTimeout));
+  rig.emulator.set_reply_delay(1, 0.3);  // the request below is still waiting when it goes
+  std::thread unplug([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    rig.emulator.disconnect();
+  });
+  const double start = swivel::monotonic_s();
+  EXPECT_FALSE(rig.bus.sync_read(dxl::address::kPresentPosition, 4, ids, replies, 1.0));
+  EXPECT_LT(swivel::monotonic_s() - start, 0.5) << "noticed at once, not at the timeout";
+  unplug.join();
+  std::uint8_t error = 0;
+  EXPECT_EQ(rig.bus.ping(1, kTimeout, error), dxl::BusResult::kIoError);
+  EXPECT_FALSE(rig.bus.sync_read(dxl::address::kPresentPosition, 4, ids, replies, kTimeout));
 }
