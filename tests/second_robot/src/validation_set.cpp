@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "planner.hpp"
 #include "random.hpp"
 
 namespace swivel::second {
@@ -106,11 +107,14 @@ void hide_effect(Stream& rng, RunSpec& s, const std::string& effect) {
   } else if (effect == "steering_lag") {
     t.steering_lag_s = rng.uniform(0.03, 0.10);
   } else if (effect == "steering_rate_limit") {
-    t.steering_rate_limit_radps = d.steering_rate_limit_radps * rng.uniform(0.25, 0.5);
+    t.steering_rate_limit_radps = d.steering_rate_limit_radps * rng.uniform(0.2, 0.4);
   } else if (effect == "accel_limit") {
-    s.model.accel_limits = false;  // the model does not state the robot's limits
-    t.linear_accel_limit_mps2 = d.linear_accel_limit_mps2 * rng.uniform(0.5, 1.0);
-    t.angular_accel_limit_radps2 = d.angular_accel_limit_radps2 * rng.uniform(0.5, 1.0);
+    // The model states none; the robot's limits lie below the user's own ramps (which the
+    // design's limits never bind), so that they act.
+    s.model.accel_limits = false;
+    const double share = d.drive == Drive::kSwpc ? Planner::kCasterEaseShare : 1.0;
+    t.linear_accel_limit_mps2 = share * Planner::kEaseLinearMps2 * rng.uniform(0.4, 0.8);
+    t.angular_accel_limit_radps2 = share * Planner::kEaseAngularRadps2 * rng.uniform(0.4, 0.8);
   }
 }
 
