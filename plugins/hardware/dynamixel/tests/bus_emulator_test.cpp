@@ -194,7 +194,7 @@ TEST(DynamixelBus, AHungUpPortIsAnErrorNotASilentServo) {
   std::array<dxl::SyncReply, 2> replies{};
   const std::uint8_t ids[] = {1, 2};
   ASSERT_TRUE(rig.bus.sync_read(dxl::address::kPresentPosition, 4, ids, replies, kTimeout));
-  rig.emulator.set_reply_delay(1, 0.3);  // the request below is still waiting when it goes
+  rig.emulator.set_silent(1, true);  // the request below is still waiting when it goes
   std::thread unplug([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     rig.emulator.disconnect();
