@@ -100,6 +100,9 @@ std::string run_log_text(const RunSpec& spec, const std::vector<Row>& rows) {
               : "# drivetrain: differential\n";
   out += "# source: swivel-second-run (second robot generator), seed " + std::to_string(spec.seed) +
          ", " + number(spec.row_rate_hz) + " Hz rows, script " + script_name(spec.script) + "\n";
+  // Motion capture without latency is as good as stamped on the robot's clock; with its
+  // own latency it is not, and the workflow fits the offset.
+  if (spec.truth.mocap_latency_s == 0.0) out += "# truth_clock: shared\n";
   out += "t,cmd_vx,cmd_vy,cmd_wz";
   if (swpc) {
     for (std::size_t i = 1; i <= n; ++i) out += ",steer_" + std::to_string(i);

@@ -101,7 +101,9 @@ void hide_effect(Stream& rng, RunSpec& s, const std::string& effect) {
     for (std::size_t i = 0; i < n; ++i)
       t.steering_offset_rad[i] = sign(rng) * rng.uniform(0.4, 1.5) * kDeg;
   } else if (effect == "sensor_latency") {
+    // Told apart from the motion capture's own delay only on a shared clock: none here.
     t.sensor_delay_s = rng.uniform(0.02, 0.08);
+    t.mocap_latency_s = 0.0;
   } else if (effect == "actuator_lag") {
     t.actuator_lag_s = rng.uniform(0.03, 0.10);
   } else if (effect == "steering_lag") {

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -45,6 +46,11 @@ TEST(SecondRobotFiles, ReadBackWithTheProjectsReaders) {
     EXPECT_EQ(log.header.robot, name);
     EXPECT_EQ(log.header.drivetrain == DrivetrainKind::kSwpc, d.drive == Drive::kSwpc);
     EXPECT_EQ(log.header.module_count, d.wheel_count());
+    // No motion-capture latency: declared as on the robot's clock.
+    EXPECT_NE(
+        std::find(log.header.comments.begin(), log.header.comments.end(), "truth_clock: shared"),
+        log.header.comments.end())
+        << name;
     const double expected_rows = spec.duration_s * spec.row_rate_hz;
     EXPECT_NEAR(static_cast<double>(log.samples.size()), expected_rows, 2.0) << name;
     std::size_t truth = 0;
@@ -150,6 +156,7 @@ TEST(SecondRobotSensors, MotionCaptureSeesTheMarkerLate) {
   set_truth(spec, "mocap.marker_x_m=0.05");
   set_truth(spec, "mocap.marker_y_m=-0.02");
   set_truth(spec, "mocap.marker_yaw_rad=0.04");
+  EXPECT_EQ(generate(spec).run_csv.find("truth_clock"), std::string::npos);
   const std::vector<Row> rows = simulate(spec);
   std::size_t checked = 0;
   for (std::size_t j = 3; j < rows.size(); ++j) {
