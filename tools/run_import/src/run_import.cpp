@@ -139,15 +139,15 @@ WheelColumn wheel_column(ParamReader r, bool header_row) {
   return w;
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
-    s.remove_suffix(1);
-  }
+// Blanks around a line or cell (and a CR line end) are not data, except that a tab is never a
+// blank when it is the delimiter: a tab-separated line may end in empty cells.
+std::string_view trim(std::string_view s, char delimiter) {
+  const auto blank = [delimiter](char c) { return c == ' ' || (c == '\t' && delimiter != '\t'); };
+  while (!s.empty() && blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && (blank(s.back()) || s.back() == '\r')) s.remove_suffix(1);
   return s;
 }
 
-// Cells are trimmed of blanks, except that a tab delimiter is never a blank.
 void split(std::string_view line, char delimiter, std::vector<std::string_view>& cells) {
   cells.clear();
   std::size_t start = 0;
@@ -155,7 +155,7 @@ void split(std::string_view line, char delimiter, std::vector<std::string_view>&
     const std::size_t at = line.find(delimiter, start);
     const std::string_view cell =
         line.substr(start, at == std::string_view::npos ? std::string_view::npos : at - start);
-    cells.push_back(trim(cell));
+    cells.push_back(trim(cell, delimiter));
     if (at == std::string_view::npos) return;
     start = at + 1;
   }
@@ -324,7 +324,7 @@ class Importer {
   // The next line that is neither blank nor a comment, split into cells_.
   bool next_data_line() {
     while (next_line()) {
-      const std::string_view line = trim(line_);
+      const std::string_view line = trim(line_, map_.delimiter);
       if (skipped(line)) continue;
       split(line, map_.delimiter, cells_);
       if (cells_.size() < min_columns_) {
@@ -359,7 +359,7 @@ class Importer {
     if (map_.header_row) {
       bool found = false;
       while (next_line()) {
-        const std::string_view line = trim(line_);
+        const std::string_view line = trim(line_, map_.delimiter);
         if (skipped(line)) continue;
         found = true;
         break;
@@ -368,7 +368,7 @@ class Importer {
         throw ImportError(name_ + ":" + std::to_string(std::max<std::size_t>(line_number_, 1)) +
                           ": missing header row (the map says 'header_row: true')");
       }
-      split(trim(line_), map_.delimiter, cells_);
+      split(trim(line_, map_.delimiter), map_.delimiter, cells_);
       for (ColumnRef* c : refs) {
         if (c->name.empty()) continue;
         const auto it = std::find(cells_.begin(), cells_.end(), c->name);

@@ -245,6 +245,18 @@ commands:
             "columns must be all present or all empty");
 }
 
+TEST(Import, TabDelimitedFilesKeepTheirEmptyCells) {
+  const std::string map = replaced(kMap, "input: {header_row: false}",
+                                   R"(input: {header_row: false, delimiter: "\t"})");
+  const RunLog log = import_text(map, "0\t1\t2\t\t\t\n0.1\t3\t4\t5\t6\t7\n");
+  ASSERT_EQ(log.samples.size(), 2U);
+  EXPECT_FALSE(log.samples[0].has_truth);
+  EXPECT_DOUBLE_EQ(log.samples[1].wheel_rad[0], 4 * kTwoPi / 2796.8);
+  EXPECT_DOUBLE_EQ(log.samples[1].truth.x_m, 0.005);
+  EXPECT_EQ(map_error(replaced(kMap, "input: {header_row: false}", "input: {delimiter: \";;\"}")),
+            "map.yaml:3:9: input.delimiter: expected one character (or \"\\t\"), got ';;'");
+}
+
 TEST(Import, MalformedLinesNameFileLineAndColumn) {
   EXPECT_EQ(import_error(kMap, "0,0,0,0,0,0\n0.05,1,x,0,0,0\n"),
             "lab.csv:2: column 2 [map.yaml: wheels.right]: expected a finite number, got 'x'");
