@@ -19,13 +19,15 @@ constexpr double kRankTolerance = 1e-9;
 // Eigenvalues of J'J, scaled to a unit diagonal, below this share of the largest are
 // combinations the run does not inform enough to fix.
 constexpr double kWeakInformation = 1e-3;
+// A parameter whose information is below this share of the best-informed one's has none.
+constexpr double kNoInformation = 1e-14;
 
 // The information J'J (z units) split into the combinations the run fixes and those it does
 // not. It is judged scaled to a unit diagonal, y = z / d with d = 1 / sqrt(diag): each
 // parameter against its own spread, so that how strongly one parameter acts (a lever arm of a
 // centimetre against a scale of a permille) cannot make another look uninformed; combinations
 // that trade against each other still show as small eigenvalues. A parameter with no
-// information at all is a combination not fixed.
+// information at all is a combination not fixed (one barely informed keeps its wide sigma).
 struct InformationSplit {
   Eigen::VectorXd d;           ///< z = d .* y
   Eigen::MatrixXd inverse;     ///< pseudo-inverse of J'J on the fixed combinations, z units
@@ -37,13 +39,15 @@ InformationSplit split_information(const Eigen::MatrixXd& information) {
   InformationSplit out;
   out.d = Eigen::VectorXd::Ones(p);
   const double largest = p > 0 ? information.diagonal().maxCoeff() : 0.0;
+  const auto informed = [&information, largest](Eigen::Index a) {
+    return information(a, a) > kNoInformation * largest && information(a, a) > 0.0;
+  };
   for (Eigen::Index a = 0; a < p; ++a) {
-    const double ii = information(a, a);
-    if (ii > 1e-14 * largest && ii > 0.0) out.d(a) = 1.0 / std::sqrt(ii);
+    if (informed(a)) out.d(a) = 1.0 / std::sqrt(information(a, a));
   }
   Eigen::MatrixXd scaled = out.d.asDiagonal() * information * out.d.asDiagonal();
   for (Eigen::Index a = 0; a < p; ++a) {
-    if (!(information(a, a) > 1e-14 * largest && information(a, a) > 0.0)) {
+    if (!informed(a)) {
       scaled.row(a).setZero();
       scaled.col(a).setZero();
     }

@@ -49,6 +49,9 @@ const std::map<std::string, std::string>& kept_reasons() {
       {"sensor_latency",
        "the robot model has no latency parameter: the localizations integrate each encoder and "
        "gyro reading as of the loop cycle it arrives in"},
+      {"track_scrub",
+       "the robot model has no turn-dependent track: the differential drivetrain's odometry "
+       "uses one track width for every kind of turn"},
   };
   return reasons;
 }

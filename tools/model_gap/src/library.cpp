@@ -29,12 +29,12 @@ double typical_magnitude(const std::string& effect) {
   if (effect == "actuator_lag" || effect == "steering_lag") return 0.05;  // s
   if (effect == "sensor_latency") return 0.02;                            // s
   if (effect == "caster_offset") return 0.1;                              // factor
-  return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width
+  return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width, track_scrub
 }
 
-const char* const kSensorEffects[] = {"gyro_bias",      "gyro_scale",    "wheel_radius",
-                                      "track_width",    "caster_offset", "steering_offset",
-                                      "sensor_latency", "slip"};
+const char* const kSensorEffects[] = {"gyro_bias",       "gyro_scale",     "wheel_radius",
+                                      "track_width",     "track_scrub",    "caster_offset",
+                                      "steering_offset", "sensor_latency", "slip"};
 const char* const kCommandEffects[] = {"actuator_lag", "steering_lag"};
 
 bool in_question(const std::string& effect, Question q) {

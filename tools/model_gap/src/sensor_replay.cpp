@@ -167,7 +167,8 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,
     }
     Pose2 delta;
     if (!swpc_) {
-      delta = differential::forward_increment(plant.differential, dpsi[0], dpsi[1]);
+      delta = differential::forward_increment(sim::effective_differential(plant, dpsi[0], dpsi[1]),
+                                              dpsi[0], dpsi[1]);
     } else {
       for (std::size_t i = 0; i < modules_; ++i) {
         const double dphi = run.steer_rad[i][k] - run.steer_rad[i][k - 1];

@@ -127,6 +127,38 @@ std::string plus_minus(double value, double sigma, double unit, int precision) {
   return s.str();
 }
 
+// How much the run's turning differs in kind: the spread (10th to 90th percentile) of the
+// spin share of its rows (sim::spin_share), each row weighted by how far it turned. A run
+// that turns only one way (only on the spot, or on one circle) cannot tell a turn-dependent
+// track from a track width.
+double spin_share_spread(const RunData& run) {
+  if (run.drivetrain != DrivetrainKind::kDifferential) return 0.0;
+  std::vector<std::pair<double, double>> rows;  // (share, turn)
+  double total = 0.0;
+  for (std::size_t k = 1; k < run.size(); ++k) {
+    const double l = run.wheel_rad[0][k] - run.wheel_rad[0][k - 1];
+    const double r = run.wheel_rad[1][k] - run.wheel_rad[1][k - 1];
+    const double turn = std::abs(r - l);
+    if (turn <= 0.0) continue;
+    rows.emplace_back(sim::spin_share(l, r), turn);
+    total += turn;
+  }
+  if (rows.empty()) return 0.0;
+  std::sort(rows.begin(), rows.end());
+  const auto quantile = [&](double q) {
+    double acc = 0.0;
+    for (const auto& [share, turn] : rows) {
+      acc += turn;
+      if (acc >= q * total) return share;
+    }
+    return rows.back().first;
+  };
+  return quantile(0.9) - quantile(0.1);
+}
+
+// Below this spread the run turns in one way only (see spin_share_spread).
+constexpr double kMinSpinShareSpread = 0.3;
+
 std::vector<double> squared_wheel_travel(const WindowMotion& motion) {
   std::vector<double> out(motion.wheel_travel_rad.size());
   for (std::size_t j = 0; j < out.size(); ++j)
@@ -268,10 +300,17 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   const MotionPeaks peaks = motion_peaks(run, robot_path);
   std::vector<Candidate> sensor_library =
       candidate_library(nominal, Question::kSensorToPose, peaks);
-  std::erase_if(sensor_library, [&sensors](const Candidate& c) {
+  const bool turns_of_one_kind = spin_share_spread(run) < kMinSpinShareSpread;
+  if (turns_of_one_kind && nominal.drivetrain == DrivetrainKind::kDifferential) {
+    result.notes.push_back(
+        "The run turns in one way only (on the spot, or on arcs of one kind): a turn-dependent "
+        "track (track_scrub) cannot be told from a track width, and is not a candidate.");
+  }
+  std::erase_if(sensor_library, [&](const Candidate& c) {
     const bool gyro = c.name == "gyro_bias" || c.name == "gyro_scale";
     return (gyro && !sensors.uses_gyro()) ||
-           (c.name == "sensor_latency" && sensors.fits_time_offset());
+           (c.name == "sensor_latency" && sensors.fits_time_offset()) ||
+           (c.name == "track_scrub" && turns_of_one_kind);
   });
   result.sensor =
       analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, options.question);

@@ -37,6 +37,7 @@ void expect_same_plant(const sim::PlantParams& a, const sim::PlantParams& b,
   EXPECT_EQ(a.sensors.wheel_encoder_counts_per_rev, b.sensors.wheel_encoder_counts_per_rev);
   EXPECT_EQ(a.sensors.steering_encoder_counts_per_rev, b.sensors.steering_encoder_counts_per_rev);
   EXPECT_EQ(a.slip_gain_per_radps2, b.slip_gain_per_radps2);
+  EXPECT_EQ(a.track_spin_scale, b.track_spin_scale);
   EXPECT_EQ(a.actuator_time_constant_s, b.actuator_time_constant_s);
   EXPECT_EQ(a.steering_time_constant_s, b.steering_time_constant_s);
   EXPECT_EQ(a.sensor_delay_s, b.sensor_delay_s);
@@ -67,7 +68,8 @@ RobotModel calibrated(const std::string& name) {
 
 const std::vector<std::string> kFoldable = {"gyro_bias",   "gyro_scale",    "wheel_radius",
                                             "track_width", "caster_offset", "steering_offset"};
-const std::vector<std::string> kKept = {"slip", "actuator_lag", "steering_lag", "sensor_latency"};
+const std::vector<std::string> kKept = {"slip", "actuator_lag", "steering_lag", "sensor_latency",
+                                        "track_scrub"};
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
   for (const std::string& n : names) {

@@ -91,6 +91,8 @@ INSTANTIATE_TEST_SUITE_P(
             "docent", {{"gyro_bias", "bias_rad_s", 0.005, 0.0003}}, Question::kSensorToPose, 40.0},
         HiddenCase{
             "docent", {{"track_width", "scale", 1.05, 0.002}}, Question::kSensorToPose, 40.0},
+        HiddenCase{
+            "docent", {{"track_scrub", "spin_scale", 1.04, 0.004}}, Question::kSensorToPose, 40.0},
         HiddenCase{"docent",
                    {{"actuator_lag", "time_constant_s", 0.08, 0.003}},
                    Question::kCommandToMotion,

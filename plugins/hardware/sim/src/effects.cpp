@@ -72,6 +72,14 @@ std::vector<EffectInfo> effect_library(const RobotModel& model) {
     lib.push_back({"track_width",
                    "true track width = model track width * scale",
                    {{"scale", 1.0, 0.5, 1.5, "factor on the track width"}}});
+    lib.push_back(
+        {"track_scrub",
+         "the effective track depends on how the robot turns (tyre scrub): track * (1 + "
+         "(spin_scale - 1) s), s = |w_r - w_l| / (|w_r + w_l| + |w_r - w_l|) of the wheel "
+         "rates (1 on the spot, 0 straight)",
+         {{"spin_scale", 1.0, 0.8, 1.2,
+           "effective track turning on the spot over that on straight and gently "
+           "curved paths"}}});
   } else {
     EffectInfo caster{"caster_offset", "true caster offset = model caster offset * scale", {}};
     EffectInfo steer{"steering_offset",
@@ -168,6 +176,20 @@ void set_effect(RobotModel& model, const std::string& assignment) {
   model.effects = std::move(candidate.effects);
 }
 
+double spin_share(double left, double right) {
+  const double turn = std::abs(right - left);
+  const double total = std::abs(right + left) + turn;
+  return total > 0.0 ? turn / total : 0.0;
+}
+
+DifferentialParams effective_differential(const PlantParams& plant, double left, double right) {
+  DifferentialParams d = plant.differential;
+  if (plant.track_spin_scale != 1.0) {
+    d.track_width_m *= 1.0 + (plant.track_spin_scale - 1.0) * spin_share(left, right);
+  }
+  return d;
+}
+
 PlantParams resolve_plant(const RobotModel& model) {
   validate_effects(model);
   PlantParams p;
@@ -191,6 +213,9 @@ PlantParams resolve_plant(const RobotModel& model) {
     p.differential.wheel_radius_left_m *= param_or(radius, "left_scale", 1.0);
     p.differential.wheel_radius_right_m *= param_or(radius, "right_scale", 1.0);
     p.differential.track_width_m *= param_or(track, "scale", 1.0);
+    if (const EffectParams* scrub = effect("track_scrub")) {
+      p.track_spin_scale = param_or(*scrub, "spin_scale", 1.0);
+    }
   } else {
     if (model.modules.size() < 2 || model.modules.size() > kMaxModules) {
       throw std::invalid_argument("swpc model '" + model.name + "' has " +

@@ -185,7 +185,7 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       t = swpc_twist(command, ground.data());
     } else {
       const differential::WheelRates rates{ground[0], ground[1]};
-      t = differential::forward(plant_.differential, rates);
+      t = differential::forward(effective_differential(plant_, ground[0], ground[1]), rates);
       if (command.mode[0] == ModuleDriveMode::kLocked ||
           command.mode[1] == ModuleDriveMode::kLocked) {
         // One wheel held: the robot pivots about it (the other wheel's arc sets the rate).

@@ -48,7 +48,7 @@ TEST(EffectLibrary, ListsTheEffectsOfEachDrivetrain) {
   for (const EffectInfo& e : effect_library(docent())) diff.push_back(e.name);
   EXPECT_EQ(diff,
             (std::vector<std::string>{"gyro_bias", "gyro_scale", "wheel_radius", "track_width",
-                                      "slip", "actuator_lag", "sensor_latency"}));
+                                      "track_scrub", "slip", "actuator_lag", "sensor_latency"}));
   const auto swpc = effect_library(swpc4());
   const EffectInfo* steer = find_effect(swpc, "steering_offset");
   ASSERT_NE(steer, nullptr);
@@ -154,6 +154,25 @@ TEST(Effects, WiderTrackTurnsSlower) {
   model.effects["track_width"]["scale"] = 1.05;
   const HardwareState hw = run(model, wheels(-2.0, 2.0), 1.0);
   EXPECT_NEAR(hw.gyro_wz_radps, 2.0 * 2.0 * 0.075 / (0.40 * 1.05), 1e-9);
+}
+
+TEST(Effects, TrackScrubWidensTheTrackOnlyAsMuchAsTheRobotTurns) {
+  EXPECT_DOUBLE_EQ(spin_share(-2.0, 2.0), 1.0);  // on the spot
+  EXPECT_DOUBLE_EQ(spin_share(2.0, 2.0), 0.0);   // straight
+  EXPECT_DOUBLE_EQ(spin_share(0.0, 0.0), 0.0);   // at rest
+  EXPECT_DOUBLE_EQ(spin_share(0.0, 4.0), 0.5);   // |4 - 0| / (|4 + 0| + |4 - 0|)
+  EXPECT_DOUBLE_EQ(spin_share(1.0, 3.0), 1.0 / 3.0);
+  RobotModel model = docent();
+  model.effects["track_scrub"]["spin_scale"] = 1.04;
+  // On the spot the whole factor, on an arc with spin share 1/2 half of it.
+  HardwareState hw = run(model, wheels(-2.0, 2.0), 1.0);
+  EXPECT_NEAR(hw.gyro_wz_radps, 2.0 * 2.0 * 0.075 / (0.40 * 1.04), 1e-9);
+  hw = run(model, wheels(0.0, 4.0), 1.0);
+  EXPECT_NEAR(hw.gyro_wz_radps, 4.0 * 0.075 / (0.40 * 1.02), 1e-9);
+  // Straight: no turn to scrub.
+  Pose2 truth;
+  hw = run(model, wheels(3.0, 3.0), 2.0, &truth);
+  EXPECT_NEAR(truth.yaw_rad, 0.0, 1e-12);
 }
 
 TEST(Effects, SteeringOffsetShiftsTheSteeringEncoder) {

@@ -12,6 +12,10 @@
 //   wheel_radius    left_scale, right_scale (1)       true wheel radius *= scale
 //                   (swpc: module_<i>_scale, i = 1..N)
 //   track_width     scale (1)          differential   true track width *= scale
+//   track_scrub     spin_scale (1)     differential   the effective track depends on how the
+//                                                     robot turns (tyre scrub): track *
+//                                                     (1 + (spin_scale - 1) s), s the share of
+//                                                     turning in the wheel rates (spin_share)
 //   caster_offset   module_<i>_scale (1)   swpc       true caster offset *= scale
 //   steering_offset module_<i>_rad (0)     swpc       true steering offset += rad, so the
 //                                                     encoder reads true - offset
@@ -88,8 +92,18 @@ struct PlantParams {
   double actuator_time_constant_s = 0.0;  ///< wheels (and steering without steering_lag)
   double steering_time_constant_s = 0.0;  ///< steering drives
   double sensor_delay_s = 0.0;
+  /// track_scrub: the effective track turning on the spot over that on straight paths.
+  double track_spin_scale = 1.0;
   MotionLimits limits;  ///< the model's `limits:`
 };
+
+/// How much of a differential robot's wheel motion is turning: |r - l| / (|r + l| + |r - l|)
+/// of the wheel rates (or increments) l, r; 1 turning on the spot, 0 straight, 0 at rest.
+double spin_share(double left, double right);
+
+/// The differential geometry that moves the robot for wheel rates (or increments) l, r: the
+/// plant's, with the track of its track_scrub for that turn.
+DifferentialParams effective_differential(const PlantParams& plant, double left, double right);
 
 /// Folds `model.effects` into the model's parameters.
 /// @throws std::invalid_argument as validate_effects, or for a model without 2..kMaxModules
