@@ -616,11 +616,16 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
   double next_s = last_s;
   ExchangeFloor quickest(kExchangeFloorBlockS);
   // A cycle that starts this long after the last one may have let the servos' watchdogs
-  // expire: their Bus Watchdog is read back then.
+  // expire: their Bus Watchdog is read back then, and every kWatchdogReadbackS anyway.
   const double watchdog_check_s = watchdog_units_ > 0 ? 0.5 * bus_watchdog_s_ : 1e300;
+  double watchdog_readback_s = watchdog_units_ > 0 ? last_s + kWatchdogReadbackS : 1e300;
   while (!stop_.load(std::memory_order_acquire)) {
     const double start_s = swivel::monotonic_s();
-    const bool late = start_s - last_s > watchdog_check_s;
+    bool late = start_s - last_s > watchdog_check_s;
+    if (start_s >= watchdog_readback_s) {
+      late = true;
+      watchdog_readback_s = start_s + kWatchdogReadbackS;
+    }
     const double dt = std::clamp(start_s - last_s, 0.0, 0.1);
     last_s = start_s;
     commands_.take(command);
@@ -697,7 +702,7 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
         r.hardware_error = bits;
       }
     }
-    if (ok && late && r.fault == FaultKind::kNone) {
+    if (ok && late && r.fault == FaultKind::kNone) {  // also every kWatchdogReadbackS
       // Goals written to a servo whose watchdog expired are refused without a word (a Sync
       // Write has no status): ask each.
       std::array<dxl::SyncReply, kMaxServos> watchdog{};

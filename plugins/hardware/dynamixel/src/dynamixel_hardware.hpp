@@ -88,6 +88,9 @@ class DynamixelHardware final : public Hardware {
   /// Block of ExchangeFloor in the bus thread: a lasting latency change is learnt in 0.5 s at
   /// most; each block holds some 125 exchanges at the default 2 ms bus period.
   static constexpr double kExchangeFloorBlockS = 0.25;
+  /// How often the bus thread reads Bus Watchdog back from every servo (besides after a late
+  /// cycle): a servo whose watchdog expired refuses goals without a word.
+  static constexpr double kWatchdogReadbackS = 0.25;
   /// Start-up exchanges (ping, reads, writes of activate() and deactivate()) are tried this
   /// often before one that gets no good status refuses.
   static constexpr int kSetupAttempts = 3;

@@ -142,6 +142,16 @@ void Emulator::set_reply_delay(std::uint8_t id, double delay_s) {
   std::lock_guard lock(mutex_);
   servos_.at(id).reply_delay_s = delay_s;
 }
+void Emulator::expire_bus_watchdog(std::uint8_t id) {
+  std::lock_guard lock(mutex_);
+  Servo& s = servos_.at(id);
+  const std::uint8_t value = s.table[address::kBusWatchdog];
+  if (value == 0 || value > kBusWatchdogMax) return;
+  const double now_s = monotonic_s();
+  advance(now_s);
+  s.table[address::kBusWatchdog] = kBusWatchdogExpired;
+  watchdog_expiries_.push_back({id, now_s});
+}
 void Emulator::drop_replies(std::uint8_t id, int count) {
   std::lock_guard lock(mutex_);
   servos_.at(id).drop_replies = count;

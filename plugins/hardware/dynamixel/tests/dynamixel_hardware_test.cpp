@@ -505,6 +505,30 @@ TEST(DynamixelHardware, BusWatchdogIsArmedFedAndDisarmed) {
   EXPECT_EQ(emulator.bus_watchdog(2), 0);
 }
 
+// A servo whose watchdog expired (it missed the bus's packets: a stalled host, a noisy
+// line) stands and refuses goals without a word to a Sync Write: the plugin reads it back
+// and faults naming it; a clear re-arms it.
+TEST(DynamixelHardware, AnExpiredWatchdogIsAFaultNamingTheServo) {
+  dxl::Emulator emulator(ids({1, 2}));
+  const RobotModel model = differential();
+  DynamixelHardware hw;
+  configure(hw, model, diff_params(emulator.port()));
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  HardwareState s;
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.1, s), Status::kOk) << hw.last_error();
+  const std::uint8_t armed = emulator.bus_watchdog(2);
+  ASSERT_GT(armed, 0);
+  emulator.expire_bus_watchdog(2);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 3.0, s), Status::kError);
+  EXPECT_STREQ(hw.last_error(), "dynamixel ID 2 (right wheel): bus watchdog expired");
+  hw.on_error(hw.last_error());
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  EXPECT_EQ(emulator.bus_watchdog(2), armed);
+  ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.3, s), Status::kOk) << hw.last_error();
+  EXPECT_NE(emulator.goal_velocity(2), 0);
+  hw.deactivate();
+}
+
 TEST(DynamixelHardware, RefusesAWatchdogShorterThanAFewBusPeriods) {
   const RobotModel model = differential();
   DynamixelHardware hw;

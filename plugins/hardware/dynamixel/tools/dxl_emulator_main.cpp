@@ -6,7 +6,8 @@
 //                       [--fault KIND:ID:START_S ...]
 //
 // Prints the device path (and makes PATH a symbolic link to it with --link), then serves
-// until SIGINT or SIGTERM and prints the Torque Enable writes it saw. Faults, from START_S
+// until SIGINT or SIGTERM and prints the Torque Enable writes it saw and the Bus Watchdog
+// expiries (a servo that stopped by itself: the daemon died or stalled). Faults, from START_S
 // seconds after start: silence, crc (corrupt CRC), hwerror (overload bit), slow (20 ms replies).
 
 #include <signal.h>
@@ -112,6 +113,9 @@ int main(int argc, char** argv) {
     }
     for (const auto& w : emulator.torque_writes()) {
       std::printf("torque_enable id=%u value=%u t=%.3f\n", w.id, w.value, w.time_s - start_s);
+    }
+    for (const auto& e : emulator.watchdog_expiries()) {
+      std::printf("bus_watchdog_expired id=%u t=%.3f\n", e.id, e.time_s - start_s);
     }
     if (!link.empty()) std::filesystem::remove(link);
   } catch (const std::exception& e) {

@@ -87,6 +87,9 @@ class Emulator {
   /// Sets Hardware Error Status to `bits` (0 clears it); non-zero also turns the torque off.
   void set_hardware_error(std::uint8_t id, std::uint8_t bits);
   void set_reply_delay(std::uint8_t id, double delay_s);
+  /// An armed Bus Watchdog of `id` expires now, as if the servo had missed the bus's packets
+  /// for its time (the servo stops; its goals turn read-only).
+  void expire_bus_watchdog(std::uint8_t id);
   /// The next `count` status packets of `id` are not sent (a transient loss).
   void drop_replies(std::uint8_t id, int count);
   /// EEPROM settings, as if written with a configuration tool before.
