@@ -29,12 +29,12 @@ namespace {
 
 constexpr int kDomain = 68;
 constexpr double kGyroBiasRadps = 0.004;
-// The script: at rest, then a figure that turns both ways at several speeds (12 s), looped.
-constexpr double kRestS = 6.0;
-constexpr double kMotionS = 12.0;
-// A recording started at rest holds the whole motion that follows and the start of the rest
-// after it (the daemon may take a few seconds to answer on a loaded machine).
-constexpr double kRecordS = kMotionS + kRestS + 1.0;
+// The script, looped: at rest, then a figure that turns both ways at several speeds.
+constexpr double kRestS = 3.0;
+constexpr double kMotionS = 7.0;
+// A recording starting anywhere in the loop holds one whole drive from rest to rest, with the
+// second it takes the limits to bring the robot to rest after it: a loop and a drive, and 2 s.
+constexpr double kRecordS = kRestS + 2.0 * kMotionS + 2.0;
 
 std::string write_setup(const std::string& dir, const std::string& robot) {
   std::string nominal = read_text(source_dir() + "/config/robots/docent.yaml");
@@ -58,12 +58,11 @@ std::string write_setup(const std::string& dir, const std::string& robot) {
          << "localization: {plugin: raw_eg, params: {heading_source: gyro}}\n"
          << "command:\n  timeout_s: 0.5\n  source: script\n  script:\n"
          << "    - {vx_mps: 0.0, vy_mps: 0.0, wz_radps: 0.0, duration_s: " << kRestS << "}\n"
-         << "    - {vx_mps: 0.3, vy_mps: 0.0, wz_radps: 0.0, duration_s: 2.0}\n"
-         << "    - {vx_mps: 0.3, vy_mps: 0.0, wz_radps: 0.6, duration_s: 2.0}\n"
-         << "    - {vx_mps: 0.15, vy_mps: 0.0, wz_radps: -0.5, duration_s: 2.5}\n"
-         << "    - {vx_mps: 0.4, vy_mps: 0.0, wz_radps: 0.2, duration_s: 2.0}\n"
-         << "    - {vx_mps: 0.0, vy_mps: 0.0, wz_radps: 0.8, duration_s: 1.5}\n"
-         << "    - {vx_mps: 0.25, vy_mps: 0.0, wz_radps: -0.3, duration_s: 2.0}\n"
+         << "    - {vx_mps: 0.3, vy_mps: 0.0, wz_radps: 0.0, duration_s: 1.5}\n"
+         << "    - {vx_mps: 0.3, vy_mps: 0.0, wz_radps: 0.6, duration_s: 1.5}\n"
+         << "    - {vx_mps: 0.15, vy_mps: 0.0, wz_radps: -0.5, duration_s: 1.5}\n"
+         << "    - {vx_mps: 0.0, vy_mps: 0.0, wz_radps: 0.8, duration_s: 1.0}\n"
+         << "    - {vx_mps: 0.25, vy_mps: 0.0, wz_radps: -0.3, duration_s: 1.5}\n"
          << "status: {period_s: 1.0}\n"
          << "dds:\n  domain_id: " << kDomain << "\n  config: " << source_dir()
          << "/config/dds/loopback.xml\n";
@@ -128,7 +127,7 @@ TEST(SwiveldModelLoop, WhatTheGapWorkflowNamesReachesTheRobotsEstimate) {
   const ToolRun echo = swivelctl(ctl({"echo", "state", "--count", "1"}, robot));
   ASSERT_EQ(echo.exit_code, 0) << echo.err << daemon.err();
 
-  // 1. Record the robot on its nominal model (the script starts at rest).
+  // 1. Record the robot on its nominal model.
   const std::string before_run = dir + "/before.csv";
   const ToolRun before =
       swivelctl(ctl({"record", "--out", before_run, "--duration", std::to_string(kRecordS)}, robot),
@@ -167,7 +166,7 @@ TEST(SwiveldModelLoop, WhatTheGapWorkflowNamesReachesTheRobotsEstimate) {
   ASSERT_EQ(reload.exit_code, 0) << reload.out << reload.err << daemon.err();
   EXPECT_NE(reload.out.find("applied robot_model " + nominal), std::string::npos) << reload.out;
 
-  // 4. The same drive again, recorded from the rest the reload was applied in.
+  // 4. The same drive again.
   const std::string after_run = dir + "/after.csv";
   const ToolRun after =
       swivelctl(ctl({"record", "--out", after_run, "--duration", std::to_string(kRecordS)}, robot),
@@ -180,7 +179,7 @@ TEST(SwiveldModelLoop, WhatTheGapWorkflowNamesReachesTheRobotsEstimate) {
             << " m: RMS position error " << e0.rms_m << " m -> " << e1.rms_m << " m ("
             << e0.rms_m / e1.rms_m << "x), final " << e0.final_m << " m -> " << e1.final_m
             << " m\n";
-  EXPECT_GT(e0.length_m, 2.0) << "the drive happened";
+  EXPECT_GT(e0.length_m, 1.0) << "the drive happened";
   EXPECT_NEAR(e1.length_m, e0.length_m, 0.1 * e0.length_m) << "the same drive";
   // RMS over the drive rather than the final error: a heading drift's position error does
   // not grow steadily along a path that turns both ways, and one end point can fall where it
