@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -96,6 +97,34 @@ TEST_F(LabSimulateTest, HiddenGyroBiasShowsInTheLogOnly) {
   for (std::size_t k = 1; k < log.samples.size(); ++k) {
     EXPECT_NEAR(log.samples[k].gyro_wz_radps, 0.006, 1e-12);
   }
+}
+
+// The simulated gyro is read once a row and reports the mean rate since the previous read:
+// the log says so (swivel/run_log.hpp), and its rows times their periods add up to the
+// heading the motion capture saw, exactly, through the square's corner.
+TEST_F(LabSimulateTest, GyroColumnIsTheDeclaredMeanOverEachRow) {
+  ASSERT_EQ(simulate("--model " + robot("docent.yaml") +
+                         " --trajectory square --duration 20 --noise none",
+                     "square.csv"),
+            0)
+      << error_;
+  EXPECT_NE(read("square.csv").find("\n# gyro_wz: mean over the row\n"), std::string::npos);
+  const RunLog log = read_run_log((dir_ / "square.csv").string());
+  ASSERT_TRUE(log.header.gyro_mean_over_row);
+  ASSERT_TRUE(log.samples.back().has_truth);
+  double heading = log.samples.front().truth.yaw_rad;
+  double turned = 0.0;
+  double largest_error = 0.0;
+  for (std::size_t k = 1; k < log.samples.size(); ++k) {
+    const RunLogSample& s = log.samples[k];
+    heading += s.gyro_wz_radps * (s.t_s - log.samples[k - 1].t_s);
+    turned += std::abs(s.gyro_wz_radps) * (s.t_s - log.samples[k - 1].t_s);
+    if (!s.has_truth) continue;
+    const double error = std::remainder(heading - s.truth.yaw_rad, 2.0 * std::numbers::pi);
+    largest_error = std::max(largest_error, std::abs(error));
+  }
+  EXPECT_GT(turned, 1.5) << "a quarter turn at the corner";
+  EXPECT_LT(largest_error, 1e-9);
 }
 
 TEST_F(LabSimulateTest, SwpcCalibrationRunIsDeterministicPerSeed) {
