@@ -67,6 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   bool ok = again.header.robot == h.robot && again.header.drivetrain == h.drivetrain &&
             again.header.module_count == h.module_count &&
             again.header.estimate_columns == h.estimate_columns &&
+            again.header.gyro_mean_over_row == h.gyro_mean_over_row &&
             again.samples.size() == log.samples.size();
   for (std::size_t i = 0; ok && i < log.samples.size(); ++i) {
     ok = same(log.samples[i], again.samples[i], h.module_count, swpc, h.estimate_columns);
