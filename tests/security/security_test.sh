@@ -264,11 +264,13 @@ case_permissions_cover_every_bridge_topic() {
       grep -q '^    mocap_pose:' "$yaml" ||
         printf '    mocap_pose:\n      topic: /vrpn_mocap/docent/pose\n' >>"$yaml"
       local what="swiveld on the dds: of $(basename "$shipped")${ns:+, namespace $ns}"
+      # The child truncates the log: without the rm the loop below could read the last run's.
+      rm -f "$work/robot.log"
       CYCLONEDDS_URI=$daemon "$swiveld" --config "$yaml" >"$work/robot.log" 2>&1 &
       robot_pid=$!
       local up=0
       for _ in $(seq 200); do
-        grep -q 'motion capture from' "$work/robot.log" && { up=1; break; }
+        grep -qs 'motion capture from' "$work/robot.log" && { up=1; break; }
         kill -0 "$robot_pid" 2>/dev/null || break
         sleep 0.1
       done
@@ -424,7 +426,7 @@ case_installed_service_as_service_user_refuses_strangers() {
   robot_pid=$!
   local up=0
   for _ in $(seq 200); do
-    grep -q 'DDS: robot' "$work/robot.log" && { up=1; break; }
+    grep -qs 'DDS: robot' "$work/robot.log" && { up=1; break; }
     kill -0 "$robot_pid" 2>/dev/null || break
     sleep 0.1
   done
@@ -474,6 +476,73 @@ case_installed_service_as_service_user_refuses_strangers() {
   kill -TERM "$robot_pid"
   wait "$robot_pid" || fail "swiveld exited with an error"
   robot_pid=""
+}
+
+# start_swiveld URI WHAT: the real daemon on the simulated demo (installed-like: no script,
+# no real-time), this case's domain, with configuration URI; waits for its DDS line.
+start_swiveld() {
+  local uri=$1 what=$2 domain=${SWIVEL_TEST_DOMAIN:?}
+  mkdir -p "$work/etc"
+  cp -r "$source_dir/config/robots" "$source_dir/config/dds" "$work/etc/"
+  sed -e "s/^  domain_id: 0 /  domain_id: $domain /" -e 's/^  realtime: true /  realtime: false /' \
+    -e 's/^  source: script /  source: none /' "$source_dir/config/swiveld.yaml" \
+    >"$work/etc/swiveld.yaml"
+  rm -f "$work/robot.log"  # the child truncates it: the loop must not read the last run's
+  CYCLONEDDS_URI=$uri "${SWIVEL_SWIVELD:?}" --config "$work/etc/swiveld.yaml" >"$work/robot.log" 2>&1 &
+  robot_pid=$!
+  for _ in $(seq 200); do
+    grep -qs 'DDS: robot' "$work/robot.log" && return 0
+    kill -0 "$robot_pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  cat "$work/robot.log" >&2
+  fail "$what did not start"
+}
+
+stop_swiveld() {
+  kill -TERM "$robot_pid"
+  wait "$robot_pid" || { tail -n 20 "$work/robot.log" >&2; fail "swiveld exited with an error"; }
+  robot_pid=""
+}
+
+# The daemon warns when its identity (whose validity its permissions share) nears its end,
+# and not when it has a year to go.
+case_daemon_warns_before_its_identity_expires() {
+  local dir="$work/short"
+  SWIVEL_SERVICE_GROUP= SWIVEL_IDENTITY_DAYS=10 "$scripts/make_profile.sh" "$dir" >/dev/null
+  start_swiveld "file://$dir/identities/swiveld/cyclonedds.xml" "swiveld with a 10-day identity"
+  stop_swiveld
+  grep 'DDS Security: the permissions' "$work/robot.log" | sed 's/^/    robot| /'
+  grep -qE "warning: DDS Security: the permissions $dir/identities/swiveld/permissions.p7s .* expire on [0-9T:-]+ UTC, in 9 days" \
+    "$work/robot.log" || fail "no warning that the 10-day identity expires in 9 days"
+  echo "ok: a 10-day identity: the daemon warns it expires in 9 days"
+  start_swiveld "$daemon" "swiveld with the fixture's 365-day identity"
+  stop_swiveld
+  if grep -q 'DDS Security: the permissions' "$work/robot.log"; then
+    fail "the daemon warns about an identity valid for a year"
+  fi
+  echo "ok: a 365-day identity: no warning"
+}
+
+# A peer whose credentials fail the handshake retries for as long as it runs; the daemon
+# logs at most one failure every 10 s, and the next line counts those it left out.
+case_handshake_failures_are_rate_limited() {
+  start_swiveld "$daemon" "swiveld under the profile"
+  local got=0
+  CYCLONEDDS_URI=$rogue "$peer" watch-none 13 >"$work/out" 2>"$work/rogue.err" || got=$?
+  [[ $got == 0 ]] || { cat "$work/out" "$work/rogue.err" >&2; fail "the rogue peer exited $got"; }
+  stop_swiveld
+  local lines
+  lines=$(grep -i 'handshake' "$work/robot.log" | grep -c 'failed' || true)
+  grep -i 'handshake' "$work/robot.log" | sed 's/^/    robot| /'
+  echo "    the rogue's own log (not rate-limited): $(grep -ic 'handshake.*failed' "$work/rogue.err" || true) handshake failures"
+  [[ $lines -ge 1 ]] || fail "the daemon logged no handshake failure in 13 s of a rogue peer"
+  [[ $lines -le 2 ]] || fail "the daemon logged $lines handshake failures in 13 s, at most 2 expected"
+  if [[ $lines -eq 2 ]]; then
+    grep -qE '\([0-9]+ more handshake failures since the last one logged, not logged: at most one every 10 s\)' \
+      "$work/robot.log" || fail "the second handshake-failure line does not count the ones left out"
+  fi
+  echo "ok: $lines handshake-failure lines from the daemon in 13 s of a rogue peer"
 }
 
 "case_$case"
