@@ -20,7 +20,9 @@
 # DomainId is 0..230; Cyclone refuses a document with more). swiveld refuses a dds.domain_id
 # above 230 with a configuration that enables DDS Security (kMaxSecureDomainId in
 # core/include/swivel/dds/topics.hpp), so no domain it runs secured on falls outside these.
+# shellcheck disable=SC2034  # read by the scripts that source this file
 SWIVEL_DOMAIN_MIN=0
+# shellcheck disable=SC2034
 SWIVEL_DOMAIN_MAX=230
 
 # The daemon's identity (the one the service reads) and the group it runs as.

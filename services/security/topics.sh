@@ -13,4 +13,5 @@
 # (drivers name it <driver>/<rigid body>/pose: vrpn_mocap, mocap4r2, OptiTrack bridges).
 : "${SWIVEL_SENSOR_TOPICS:=rt/imu rt/*/imu rt/imu/* rt/*/imu/* rt/*/pose}"
 # What the daemon subscribes to and a client (or a sensor driver's identity) publishes.
+# shellcheck disable=SC2034  # read by make_permissions.sh, which sources this file
 SWIVEL_INPUT_TOPICS="$SWIVEL_COMMAND_TOPICS $SWIVEL_SENSOR_TOPICS ${SWIVEL_EXTRA_INPUT_TOPICS:-}"

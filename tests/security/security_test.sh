@@ -263,7 +263,8 @@ case_permissions_cover_every_bridge_topic() {
       grep -q '^    imu:' "$yaml" || printf '    imu:\n      topic: imu\n' >>"$yaml"
       grep -q '^    mocap_pose:' "$yaml" ||
         printf '    mocap_pose:\n      topic: /vrpn_mocap/docent/pose\n' >>"$yaml"
-      local what="swiveld on the dds: of $(basename "$shipped")${ns:+, namespace $ns}"
+      local what
+      what="swiveld on the dds: of $(basename "$shipped")${ns:+, namespace $ns}"
       # The child truncates the log: without the rm the loop below could read the last run's.
       rm -f "$work/robot.log"
       CYCLONEDDS_URI=$daemon "$swiveld" --config "$yaml" >"$work/robot.log" 2>&1 &
@@ -418,6 +419,21 @@ case_installed_service_as_service_user_refuses_strangers() {
     fail "the installed configuration no longer names dds.config: this case tests that conflict"
   grep -q "^  domain_id: $domain " "$etc/swiveld.yaml" || fail "could not move to domain $domain"
 
+  # Without the service group (the scripts' fallback, and all they did before) the service
+  # user cannot read the daemon's files; swiveld fails closed and its error says which and why.
+  local private="$work/private"
+  SWIVEL_SERVICE_GROUP='' "$scripts/make_profile.sh" "$private" >/dev/null
+  local got=0
+  as_service env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin \
+    "CYCLONEDDS_URI=file://$private/identities/swiveld/cyclonedds.xml" \
+    "SWIVEL_PLUGIN_PATH=${SWIVEL_PLUGIN_PATH:-}" \
+    "$swiveld" --config "$etc/swiveld.yaml" >"$work/private.log" 2>&1 || got=$?
+  grep 'swiveld error' "$work/private.log" | sed 's/^/    robot| /'
+  [[ $got != 0 ]] || fail "swiveld started without access to its credentials"
+  grep -qF "cannot read the DDS configuration $private/identities/swiveld/cyclonedds.xml (Permission denied, uid $uid)" \
+    "$work/private.log" || fail "swiveld's error does not name the unreadable configuration"
+  echo "ok: a profile private to root: swiveld as $service_user exits $got, naming the file it cannot read"
+
   # setpriv and env exec: the background job's pid is swiveld's.
   setpriv --reuid="$uid" --regid="$gid" --init-groups --no-new-privs -- \
     env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin "CYCLONEDDS_URI=$uri" \
@@ -509,7 +525,7 @@ stop_swiveld() {
 # and not when it has a year to go.
 case_daemon_warns_before_its_identity_expires() {
   local dir="$work/short"
-  SWIVEL_SERVICE_GROUP= SWIVEL_IDENTITY_DAYS=10 "$scripts/make_profile.sh" "$dir" >/dev/null
+  SWIVEL_SERVICE_GROUP='' SWIVEL_IDENTITY_DAYS=10 "$scripts/make_profile.sh" "$dir" >/dev/null
   start_swiveld "file://$dir/identities/swiveld/cyclonedds.xml" "swiveld with a 10-day identity"
   stop_swiveld
   grep 'DDS Security: the permissions' "$work/robot.log" | sed 's/^/    robot| /'
@@ -522,6 +538,20 @@ case_daemon_warns_before_its_identity_expires() {
     fail "the daemon warns about an identity valid for a year"
   fi
   echo "ok: a 365-day identity: no warning"
+  # An identity already expired: the daemon refuses to start, and its own error says why.
+  rm -rf "$dir/identities/swiveld"
+  SWIVEL_SERVICE_GROUP='' SWIVEL_IDENTITY_DAYS=0 "$scripts/make_identity.sh" swiveld "$dir" >/dev/null
+  SWIVEL_SERVICE_GROUP='' "$scripts/make_permissions.sh" swiveld daemon "$dir" >/dev/null
+  SWIVEL_SERVICE_GROUP='' "$scripts/render_config.sh" swiveld "$dir"
+  sleep 1.1  # past the certificate's notAfter, which is its notBefore
+  local got=0
+  CYCLONEDDS_URI="file://$dir/identities/swiveld/cyclonedds.xml" "${SWIVEL_SWIVELD:?}" \
+    --config "$work/etc/swiveld.yaml" >"$work/robot.log" 2>&1 || got=$?
+  grep 'swiveld error' "$work/robot.log" | sed 's/^/    robot| /'
+  [[ $got != 0 ]] || fail "swiveld started with an expired identity"
+  grep -qE 'swiveld error: dds_create_participant\(domain [0-9]+\): .*certificate has expired' \
+    "$work/robot.log" || fail "swiveld's error does not say that its certificate expired"
+  echo "ok: an expired identity: swiveld exits $got, its error names the expired certificate"
 }
 
 # A peer whose credentials fail the handshake retries for as long as it runs; the daemon
