@@ -29,6 +29,8 @@ namespace {
 
 constexpr int kDomain = 68;
 constexpr double kGyroBiasRadps = 0.004;
+constexpr double kLeftScale = 0.998;  // the true wheels over the model's 0.075 m
+constexpr double kRightScale = 1.002;
 // The script, looped: at rest, then a figure that turns both ways at several speeds.
 constexpr double kRestS = 3.0;
 constexpr double kMotionS = 7.0;
@@ -48,7 +50,8 @@ std::string write_setup(const std::string& dir, const std::string& robot) {
   std::string truth = nominal;
   truth.replace(truth.find("effects: {}"), std::string("effects: {}").size(),
                 "effects:\n  gyro_bias: {bias_rad_s: " + std::to_string(kGyroBiasRadps) +
-                    "}\n  wheel_radius: {left_scale: 0.998, right_scale: 1.002}");
+                    "}\n  wheel_radius: {left_scale: " + std::to_string(kLeftScale) +
+                    ", right_scale: " + std::to_string(kRightScale) + "}");
   std::ofstream(dir + "/truth.yaml") << truth;
   std::ofstream config(dir + "/swiveld.yaml");
   config << "loop: {rate_hz: 1000, realtime: false}\n"
@@ -153,6 +156,11 @@ TEST(SwiveldModelLoop, WhatTheGapWorkflowNamesReachesTheRobotsEstimate) {
     if (line.rfind('#', 0) == 0) std::cout << "model_augmented.yaml: " << line << '\n';
   }
   EXPECT_NEAR(augmented.sensors.gyro.bias_rad_s, kGyroBiasRadps, 0.001) << augmented_text;
+  // The radii too (with the gyro's heading their asymmetry moves this estimate little).
+  EXPECT_NEAR(augmented.differential.wheel_radius_left_m, 0.075 * kLeftScale, 0.075 * 5e-4)
+      << augmented_text;
+  EXPECT_NEAR(augmented.differential.wheel_radius_right_m, 0.075 * kRightScale, 0.075 * 5e-4)
+      << augmented_text;
 
   // 3. The augmented model replaces the robot's, applied by a reload with the robot at rest
   //    (the script rests kRestS between drives; a reload while it drives is refused: retried).
