@@ -120,7 +120,8 @@ ssize_t SerialPort::read_some(std::span<std::uint8_t> buffer, double timeout_s) 
   }
 }
 
-void SerialPort::discard_input() noexcept {
+// Not const: it changes the device's state (its input queue), though not this object's.
+void SerialPort::discard_input() noexcept {  // NOLINT(readability-make-member-function-const)
   if (fd_ >= 0) tcflush(fd_, TCIFLUSH);
 }
 

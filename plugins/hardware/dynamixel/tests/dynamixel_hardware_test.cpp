@@ -461,7 +461,7 @@ double left_angle_error(DynamixelHardware& hw, dxl::Emulator& emulator, Hardware
 }
 
 std::string temp_dir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "dxl_" + name + "_" + std::to_string(getpid());
+  std::string dir = ::testing::TempDir() + "dxl_" + name + "_" + std::to_string(getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -470,7 +470,7 @@ std::string temp_dir(const std::string& name) {
 // A daemon configuration file holding the drivetrain section the plugin compares the servos'
 // Velocity Limit with.
 std::string drivetrain_file(const std::string& dir, const std::string& drivetrain_yaml) {
-  const std::string path = dir + "/swiveld.yaml";
+  std::string path = dir + "/swiveld.yaml";
   std::ofstream(path) << "drivetrain: " << drivetrain_yaml << "\n";
   return path;
 }

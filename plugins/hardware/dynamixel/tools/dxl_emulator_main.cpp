@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -47,9 +48,21 @@ int usage() {
   return swivel::cli::kUsageError;
 }
 
-}  // namespace
+// Whole-string numbers: "1x" or "" is not a number.
+bool parse_int(const std::string& text, long& out) {
+  char* end = nullptr;
+  errno = 0;
+  out = std::strtol(text.c_str(), &end, 10);
+  return !text.empty() && errno == 0 && end == text.c_str() + text.size();
+}
+bool parse_double(const std::string& text, double& out) {
+  char* end = nullptr;
+  errno = 0;
+  out = std::strtod(text.c_str(), &end);
+  return !text.empty() && errno == 0 && end == text.c_str() + text.size();
+}
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"swivel-dxl-emulator: a DYNAMIXEL X-series bus on a pseudo-terminal"};
   swivel::dynamixel::Emulator::Options options;
   options.ids.clear();
@@ -65,8 +78,8 @@ int main(int argc, char** argv) {
   for (std::size_t at = 0; at < ids.size();) {
     const std::size_t comma = ids.find(',', at);
     const std::string item = ids.substr(at, comma - at);
-    const int id = std::atoi(item.c_str());
-    if (id < 0 || id > swivel::dynamixel::kMaxId) return usage();
+    long id = -1;
+    if (!parse_int(item, id) || id < 0 || id > swivel::dynamixel::kMaxId) return usage();
     options.ids.push_back(static_cast<std::uint8_t>(id));
     at = comma == std::string::npos ? ids.size() : comma + 1;
   }
@@ -77,8 +90,12 @@ int main(int argc, char** argv) {
     const std::size_t b = a == std::string::npos ? a : value.find(':', a + 1);
     if (b == std::string::npos) return usage();
     f.kind = value.substr(0, a);
-    f.id = static_cast<std::uint8_t>(std::atoi(value.substr(a + 1, b - a - 1).c_str()));
-    f.start_s = std::atof(value.substr(b + 1).c_str());
+    long id = -1;
+    if (!parse_int(value.substr(a + 1, b - a - 1), id) || id < 0 ||
+        id > swivel::dynamixel::kMaxId || !parse_double(value.substr(b + 1), f.start_s)) {
+      return usage();
+    }
+    f.id = static_cast<std::uint8_t>(id);
     if (f.kind != "silence" && f.kind != "crc" && f.kind != "hwerror" && f.kind != "slow") {
       return usage();
     }
@@ -123,4 +140,18 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // What escapes run() (argument parsing, the options' strings) still ends with a message.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-dxl-emulator: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "swivel-dxl-emulator: unknown exception\n");
+  }
+  return 1;
 }
