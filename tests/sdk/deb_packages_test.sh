@@ -168,6 +168,7 @@ grep -qE 'libc6 \(>= [0-9.]+\)' <<<"$depends" || fail "the libc6 dependency has 
 # Every library an executable or plugin links directly comes from a declared package;
 # what those need, their own packages declare.
 missing=""
+linked_pkgs=" "  # the packages whose libraries something in swivel links directly
 for f in $(find "$work/root" -type f \( -perm -u+x -o -name '*.so' \)); do
   readelf -h "$f" >/dev/null 2>&1 || continue
   for lib in $(readelf -d "$f" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
@@ -179,14 +180,35 @@ for f in $(find "$work/root" -type f \( -perm -u+x -o -name '*.so' \)); do
     esac
     path=$(ldconfig -p | awk -v l="$lib" '$1 == l {print $NF; exit}') || true  # awk leaves early
     [[ -n $path ]] || continue
-    pkg=$(dpkg -S "$(readlink -f "$path")" 2>/dev/null | head -n 1 | cut -d: -f1) || true
+    # dpkg knows a file by the path its package ships (with merged /usr, /lib or /usr/lib).
+    pkg=""
+    for candidate in "$path" "$(readlink -f "$path")"; do
+      for p in "$candidate" "/usr${candidate#/usr}" "${candidate#/usr}"; do
+        pkg=$(dpkg -S "$p" 2>/dev/null | head -n 1 | cut -d: -f1) || true
+        [[ -z $pkg ]] || break 2
+      done
+    done
     case "$pkg" in
       "") ;;
-      *) grep -qw -- "$pkg" <<<"$depends" || missing+=" $pkg($(basename "$f"))" ;;
+      *) linked_pkgs+="$pkg "
+         grep -qw -- "$pkg" <<<"$depends" || missing+=" $pkg($(basename "$f"))" ;;
     esac
   done
 done
 [[ -z $missing ]] || fail "linked directly but not declared:$missing"
+# And the other way: a library package is declared only when something links it directly
+# (a statically linked library, like Ceres, must not appear). Alternatives (BLAS, LAPACK)
+# resolve to whichever provider this host has: not checked here.
+unlinked=""
+# A shlibs file may name a transition's package (libspdlog1.10-fmt9 for libspdlog1.10).
+for dep in $(tr ',' '\n' <<<"$depends" | grep -v '|' | awk '{print $1}' | grep '^lib'); do
+  found=0
+  for pkg in $linked_pkgs; do
+    [[ $dep == "$pkg" || $dep == "$pkg"-* ]] && { found=1; break; }
+  done
+  [[ $found == 1 ]] || unlinked+=" $dep"
+done
+[[ -z $unlinked ]] || fail "declared but linked by nothing in swivel:$unlinked"
 conffiles=$(dpkg-deb --ctrl-tarfile "$runtime" | tar -xOf - ./conffiles)
 grep -q '/etc/swivel/swiveld.yaml$' <<<"$conffiles" || fail "swiveld.yaml is not a conffile"
 echo "ok: dependencies declared ($depends); configuration files are conffiles"
