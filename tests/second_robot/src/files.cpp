@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -220,8 +221,10 @@ void set_truth(RunSpec& spec, const std::string& assignment) {
     if (swpc && key.rfind("module_", 0) == 0 && key.size() > 7 + suffix.size() &&
         key.compare(key.size() - suffix.size(), suffix.size(), suffix) == 0) {
       const std::string digits = key.substr(7, key.size() - 7 - suffix.size());
-      const int i = std::atoi(digits.c_str());
-      if (i >= 1 && static_cast<std::size_t>(i) <= n && std::to_string(i) == digits) {
+      char* end = nullptr;
+      const long i = std::strtol(digits.c_str(), &end, 10);
+      if (*end == '\0' && i >= 1 && static_cast<std::size_t>(i) <= n &&
+          std::to_string(i) == digits) {
         return static_cast<std::size_t>(i - 1);
       }
     }

@@ -36,7 +36,9 @@ class Stream {
       has_spare_ = false;
       return spare_;
     }
-    double u = 0.0, v = 0.0, s = 0.0;
+    double u = 0.0;
+    double v = 0.0;
+    double s = 0.0;
     do {
       u = 2.0 * uniform() - 1.0;
       v = 2.0 * uniform() - 1.0;

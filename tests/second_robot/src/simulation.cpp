@@ -38,8 +38,9 @@ double wrap(double a) {
 
 // The true robot: one contact per wheel.
 struct Contact {
-  double px = 0, py = 0;  // steering axis (differential: wheel centre)
-  double trail = 0;       // caster offset d
+  double px = 0;  // steering axis (differential: wheel centre)
+  double py = 0;
+  double trail = 0;  // caster offset d
   double radius = 0;
   double offset = 0;  // steering offset: encoder reads true - offset
 };
@@ -93,16 +94,21 @@ class Robot {
   void control(State& s, const double cmd[3], const std::vector<double>& measured_steer) const {
     const double lim[3] = {lin_limit_ * kStepS, lin_limit_ * kStepS, ang_limit_ * kStepS};
     for (int a = 0; a < 3; ++a) s.limited[a] += std::clamp(cmd[a] - s.limited[a], -lim[a], lim[a]);
-    const double vx = s.limited[0], vy = s.limited[1], w = s.limited[2];
-    std::vector<double> wheel(n_, 0.0), steer(n_, 0.0);
+    const double vx = s.limited[0];
+    const double vy = s.limited[1];
+    const double w = s.limited[2];
+    std::vector<double> wheel(n_, 0.0);
+    std::vector<double> steer(n_, 0.0);
     if (!swpc_) {
       wheel[0] = (vx - w * d_.track_width_m / 2) / d_.wheel_radius_left_m;
       wheel[1] = (vx + w * d_.track_width_m / 2) / d_.wheel_radius_right_m;
     } else {
       for (std::size_t i = 0; i < n_; ++i) {
         const CasterModule& m = d_.modules[i];
-        const double sx = vx - w * m.y_m, sy = vy + w * m.x_m;
-        const double c = std::cos(measured_steer[i]), sn = std::sin(measured_steer[i]);
+        const double sx = vx - w * m.y_m;
+        const double sy = vy + w * m.x_m;
+        const double c = std::cos(measured_steer[i]);
+        const double sn = std::sin(measured_steer[i]);
         wheel[i] = (c * sx + sn * sy) / m.wheel_radius_m;
         steer[i] = (-sn * sx + c * sy) / m.caster_offset_m - w;
         if (steer_limit_ > 0) steer[i] = std::clamp(steer[i], -steer_limit_, steer_limit_);
@@ -143,9 +149,10 @@ class Robot {
       }
       const Eigen::VectorXd dq = jac.partialPivLu().solve(-r);
       double t = 1.0;
-      for (int ls = 0; ls < 20; ++ls, t *= 0.5) {  // backtracking: the contacts saturate
+      for (int halvings = 0; halvings < 20; ++halvings) {  // backtracking: contacts saturate
         const Eigen::VectorXd trial = residual(s, q + t * dq, speed_norm);
         if (trial.norm() < r.norm()) break;
+        t *= 0.5;
       }
       q += t * dq;
       r = residual(s, q, speed_norm);
@@ -174,20 +181,27 @@ class Robot {
   [[nodiscard]] double ground_speed(const State& s, std::size_t i) const {
     const Contact& c = contacts_[i];
     const double phi = swpc_ ? s.phi[i] : 0.0;
-    const double ux = std::cos(phi), uy = std::sin(phi);
-    const double cx = c.px - c.trail * ux, cy = c.py - c.trail * uy;
-    const double vx = s.twist[0] - s.twist[2] * cy, vy = s.twist[1] + s.twist[2] * cx;
+    const double ux = std::cos(phi);
+    const double uy = std::sin(phi);
+    const double cx = c.px - c.trail * ux;
+    const double cy = c.py - c.trail * uy;
+    const double vx = s.twist[0] - s.twist[2] * cy;
+    const double vy = s.twist[1] + s.twist[2] * cx;
     return ux * vx + uy * vy;
   }
 
  private:
   // Newton's residual: momentum of the body and of each steering axis, implicit Euler.
-  Eigen::VectorXd residual(const State& s, const Eigen::VectorXd& q,
-                           const std::vector<double>& speed_norm) const {
+  [[nodiscard]] Eigen::VectorXd residual(const State& s, const Eigen::VectorXd& q,
+                                         const std::vector<double>& speed_norm) const {
     const std::size_t m = swpc_ ? n_ : 0;
     Eigen::VectorXd out(3 + m);
-    const double vx = q[0], vy = q[1], w = q[2];
-    double fx_sum = 0, fy_sum = 0, moment = 0;
+    const double vx = q[0];
+    const double vy = q[1];
+    const double w = q[2];
+    double fx_sum = 0;
+    double fy_sum = 0;
+    double moment = 0;
     const Truth& tr = spec_.truth;
     const double stiffness = tr.tyre_stiffness_per_load * load_;
     const double fmax = tr.friction_coefficient * load_;
@@ -195,8 +209,12 @@ class Robot {
       const Contact& c = contacts_[i];
       const double phi = swpc_ ? s.phi[i] : 0.0;
       const double phi_rate = swpc_ ? q[static_cast<Eigen::Index>(3 + i)] : 0.0;
-      const double ux = std::cos(phi), uy = std::sin(phi), nx = -uy, ny = ux;
-      const double cx = c.px - c.trail * ux, cy = c.py - c.trail * uy;
+      const double ux = std::cos(phi);
+      const double uy = std::sin(phi);
+      const double nx = -uy;
+      const double ny = ux;
+      const double cx = c.px - c.trail * ux;
+      const double cy = c.py - c.trail * uy;
       const double vcx = vx - w * cy - c.trail * phi_rate * nx;
       const double vcy = vy + w * cx - c.trail * phi_rate * ny;
       const double ex = c.radius * s.wheel_set[i] - (ux * vcx + uy * vcy);
@@ -209,7 +227,8 @@ class Robot {
         flon *= k;
         flat *= k;
       }
-      const double fx = ux * flon + nx * flat, fy = uy * flon + ny * flat;
+      const double fx = ux * flon + nx * flat;
+      const double fy = uy * flon + ny * flat;
       fx_sum += fx;
       fy_sum += fy;
       moment += cx * fy - cy * fx;
@@ -239,7 +258,9 @@ class Robot {
   bool swpc_ = false;
   std::vector<Contact> contacts_;
   double load_ = 0;
-  double lin_limit_ = 0, ang_limit_ = 0, steer_limit_ = 0;
+  double lin_limit_ = 0;
+  double ang_limit_ = 0;
+  double steer_limit_ = 0;
 };
 
 // The state at every tick, for sampling at the rows' times.
@@ -262,12 +283,13 @@ class History {
     const double f = x - static_cast<double>(k);
     std::vector<double> out(width_);
     for (std::size_t j = 0; j < width_; ++j) {
-      const double a = data_[k * width_ + j], b = data_[(k + 1) * width_ + j];
+      const double a = data_[k * width_ + j];
+      const double b = data_[(k + 1) * width_ + j];
       out[j] = a + f * (b - a);
     }
     return out;
   }
-  [[nodiscard]] std::size_t psi(std::size_t i) const { return 6 + i; }
+  [[nodiscard]] static std::size_t psi(std::size_t i) { return 6 + i; }
   [[nodiscard]] std::size_t phi(std::size_t i) const { return 6 + n_ + i; }
   [[nodiscard]] std::size_t ground(std::size_t i) const { return 6 + 2 * n_ + i; }
   [[nodiscard]] std::size_t travel(std::size_t i) const { return 6 + 3 * n_ + i; }
@@ -385,11 +407,11 @@ std::vector<Row> simulate(const RunSpec& spec) {
     const std::vector<double> late = history.at(t - tr.sensor_delay_s);
     for (int a = 0; a < 3; ++a) {
       row.pose[a] = now[static_cast<std::size_t>(a)];
-      row.twist[a] = now[static_cast<std::size_t>(3 + a)];
+      row.twist[a] = now[3 + static_cast<std::size_t>(a)];
     }
     for (std::size_t i = 0; i < n; ++i) {
-      row.true_wheel_rad.push_back(now[history.psi(i)]);
-      row.wheel_rad.push_back(quantize(late[history.psi(i)], wheel_counts));
+      row.true_wheel_rad.push_back(now[History::psi(i)]);
+      row.wheel_rad.push_back(quantize(late[History::psi(i)], wheel_counts));
       row.contact_speed_mps.push_back(now[history.ground(i)]);
       row.contact_travel_m.push_back(now[history.travel(i)]);
       if (swpc) {
@@ -409,7 +431,8 @@ std::vector<Row> simulate(const RunSpec& spec) {
     }
     if (frame && !mocap_rng.chance(kMocapLossProbability)) {
       const std::vector<double> seen = history.at(t - tr.mocap_latency_s);
-      const double c = std::cos(seen[2]), sn = std::sin(seen[2]);
+      const double c = std::cos(seen[2]);
+      const double sn = std::sin(seen[2]);
       row.has_mocap = true;
       row.mocap[0] = seen[0] + c * tr.marker_x_m - sn * tr.marker_y_m +
                      noise * d.mocap_position_noise_m * mocap_rng.normal();

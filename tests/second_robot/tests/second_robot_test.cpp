@@ -132,7 +132,8 @@ TEST(SecondRobotSensors, EncodersAreQuantizedAndLate) {
   set_truth(spec, "sensor_latency.delay_s=0.05");
   set_truth(spec, "steering_offset.module_3_rad=0.02");
   const std::vector<Row> rows = simulate(spec);
-  const double wheel_step = 2 * kPi / 8192, steer_step = 2 * kPi / 2000;
+  const double wheel_step = 2 * kPi / 8192;
+  const double steer_step = 2 * kPi / 2000;
   for (std::size_t j = 5; j < rows.size(); ++j) {
     for (std::size_t i = 0; i < 4; ++i) {
       const double counts = rows[j].wheel_rad[i] / wheel_step;
@@ -162,7 +163,8 @@ TEST(SecondRobotSensors, MotionCaptureSeesTheMarkerLate) {
   for (std::size_t j = 3; j < rows.size(); ++j) {
     if (!rows[j].has_mocap) continue;
     const double* p = rows[j - 3].pose;  // 0.03 s earlier at 100 Hz
-    const double c = std::cos(p[2]), s = std::sin(p[2]);
+    const double c = std::cos(p[2]);
+    const double s = std::sin(p[2]);
     EXPECT_NEAR(rows[j].mocap[0], p[0] + 0.05 * c + 0.02 * s, 2e-4);
     EXPECT_NEAR(rows[j].mocap[1], p[1] + 0.05 * s - 0.02 * c, 2e-4);
     EXPECT_NEAR(std::remainder(rows[j].mocap[2] - p[2] - 0.04, 2 * kPi), 0.0, 2e-4);
@@ -180,7 +182,9 @@ double worst_slip_share(const RunSpec& spec) {
     const double r = d.drive == Drive::kSwpc
                          ? d.modules[i].wheel_radius_m
                          : (i == 0 ? d.wheel_radius_left_m : d.wheel_radius_right_m);
-    double ground = 0, rolled = 0, path = 0;
+    double ground = 0;
+    double rolled = 0;
+    double path = 0;
     for (std::size_t j = 1; j < rows.size(); ++j) {
       const double g = rows[j].contact_travel_m[i] - rows[j - 1].contact_travel_m[i];
       ground += g;
@@ -229,7 +233,8 @@ TEST(SecondRobotPhysics, CastersSwingByTheNoSlipLaw) {
       const double phi = 0.5 * (a.true_steer_rad[i] + b.true_steer_rad[i]);
       double tw[3];
       for (int k = 0; k < 3; ++k) tw[k] = 0.5 * (a.twist[k] + b.twist[k]);
-      const double sx = tw[0] - tw[2] * m.y_m, sy = tw[1] + tw[2] * m.x_m;
+      const double sx = tw[0] - tw[2] * m.y_m;
+      const double sy = tw[1] + tw[2] * m.x_m;
       if (std::hypot(sx, sy) < 0.05) continue;
       const double law = (-std::sin(phi) * sx + std::cos(phi) * sy) / m.caster_offset_m - tw[2];
       if (std::abs(law) > 3.0) continue;  // swinging round at the clamp
@@ -285,7 +290,8 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   std::set<std::string> robots;
   std::set<bool> swpc;
   std::set<std::uint64_t> seeds;
-  double low = 1000, high = 0;
+  double low = 1000;
+  double high = 0;
   std::size_t clean = 0;
   std::set<std::string> effects;
   for (const ValidationCase& c : set) {
@@ -333,7 +339,8 @@ TEST(SecondRobotValidationSet, CleanRunsSlipLessThanTheNoise) {
     const Design d = design(spec.design);
     const std::vector<Row> rows = simulate(spec);
     std::vector<double> lost(d.wheel_count(), 0.0);
-    double window_start = 0.0, worst = 0.0;
+    double window_start = 0.0;
+    double worst = 0.0;
     for (std::size_t j = 1; j < rows.size(); ++j) {
       for (std::size_t i = 0; i < d.wheel_count(); ++i) {
         const double r = d.drive == Drive::kSwpc

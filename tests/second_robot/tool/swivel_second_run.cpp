@@ -40,9 +40,7 @@ std::string expected_text(const std::vector<ExpectedEffect>& expected) {
   return s;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"The second robot generator: a run log and its nominal model"};
   std::string robot = "cart4";
   std::vector<std::string> truth;
@@ -50,11 +48,15 @@ int main(int argc, char** argv) {
   double rate = 50.0;
   double duration = 90.0;
   std::uint64_t seed = 1;
-  bool no_accel = false, no_steer = false, fractional = false, no_noise = false;
+  bool no_accel = false;
+  bool no_steer = false;
+  bool fractional = false;
+  bool no_noise = false;
   std::string case_kind;
   std::size_t index = 0;
   bool validation_seeds = false;
-  std::string out, model_out;
+  std::string out;
+  std::string model_out;
   app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff");
   app.add_option("--true", truth, "NAME.PARAM=VALUE: the true robot (repeatable)");
   app.add_option("--script", script, "waypoints, circles, spot_turns or mixed");
@@ -126,4 +128,15 @@ int main(int argc, char** argv) {
     return swivel::cli::kUsageError;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-second-run: %s\n", e.what());
+    return 1;
+  }
 }

@@ -170,6 +170,7 @@ bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, 
 
 std::vector<Job> development_jobs(const std::vector<swivel::independent::BatteryCase>& cases) {
   std::vector<Job> jobs;
+  jobs.reserve(cases.size());
   for (const auto& c : cases) jobs.push_back({c.id, [c] { return battery::run_case(c); }});
   return jobs;
 }
@@ -182,6 +183,7 @@ std::string rate_band(double hz) {
 
 std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCase>& cases) {
   std::vector<Job> jobs;
+  jobs.reserve(cases.size());
   for (const auto& c : cases) {
     jobs.push_back(
         {c.id, [c] {
@@ -206,13 +208,12 @@ std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCas
   return jobs;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"The model-gap workflow on development and validation runs, with targets"};
   std::string set = "both";
   bool quick = false;
-  bool battery_flag = false, subset = false;
+  bool battery_flag = false;
+  bool subset = false;
   unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::string> ids;
   app.add_option("--set", set, "development, validation or both")
@@ -269,4 +270,15 @@ int main(int argc, char** argv) {
   if (quick) return 0;
   std::printf("\nvalidation targets: %s\n", met ? "all met" : "MISSED (exit 1)");
   return met ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-bench-model-gap: %s\n", e.what());
+    return 1;
+  }
 }

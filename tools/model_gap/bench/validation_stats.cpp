@@ -44,7 +44,7 @@ TargetResult proportion_target(const std::string& name, const Proportion& p, dou
 
 Interval wilson_interval(std::size_t hits, std::size_t n, double z) {
   if (n == 0) return {0.0, 1.0};
-  const double nn = static_cast<double>(n);
+  const auto nn = static_cast<double>(n);
   const double p = static_cast<double>(hits) / nn;
   const double z2 = z * z;
   const double centre = (p + z2 / (2 * nn)) / (1 + z2 / nn);

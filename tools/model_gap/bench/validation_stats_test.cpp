@@ -134,7 +134,7 @@ battery::CaseOutcome clean(const std::string& robot, bool swpc, double hz, bool 
   return o;
 }
 
-battery::CaseOutcome library(bool right, std::vector<double> deviations) {
+battery::CaseOutcome library(bool right, const std::vector<double>& deviations) {
   battery::CaseOutcome o;
   o.kind = battery::RunKind::kLibrary;
   o.correct = right;

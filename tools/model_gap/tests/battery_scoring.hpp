@@ -10,6 +10,7 @@
 //   outside  no library effect is named by either question, except those the case allows
 //            (a slippery floor may be named `slip`, the library's nearest law).
 
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -44,21 +45,21 @@ struct CaseOutcome {
   std::string robot;
   RunKind kind = RunKind::kClean;
   bool swpc = false;
-  double row_rate_hz = 0.0;            ///< from the run's median row interval
-  std::vector<std::string> tags;       ///< groups for breakdowns, e.g. "robot trike3"
-  std::vector<std::string> hidden[2];  ///< per question (sensor, command): hidden effects
-  std::vector<std::string> named[2];   ///< per question: named effects
-  Verdict verdict[2] = {Verdict::kNoSignificantGap, Verdict::kNoSignificantGap};
-  std::string summary[2];
+  double row_rate_hz = 0.0;                        ///< from the run's median row interval
+  std::vector<std::string> tags;                   ///< groups for breakdowns, e.g. "robot trike3"
+  std::array<std::vector<std::string>, 2> hidden;  ///< per question (sensor, command)
+  std::array<std::vector<std::string>, 2> named;   ///< per question: named effects
+  std::array<Verdict, 2> verdict = {Verdict::kNoSignificantGap, Verdict::kNoSignificantGap};
+  std::array<std::string, 2> summary;
   bool correct = false;  ///< the case's rule holds
   /// Every named hidden effect within 3 sigma of its truth, jointly over its parameters (on
   /// the combinations the run fixes; the rest the workflow leaves at the model's values).
   bool values_within_3_sigma = false;
-  std::vector<double> effect_deviation_z;  ///< per named hidden effect: that joint distance
-  std::string problem;                     ///< why not correct, for the report
-  std::vector<ParamCheck> params;          ///< hidden parameters the workflow named
-  double position_before_m[2] = {0, 0};    ///< final position error of each replay, before
-  double position_after_m[2] = {0, 0};
+  std::vector<double> effect_deviation_z;     ///< per named hidden effect: that joint distance
+  std::string problem;                        ///< why not correct, for the report
+  std::vector<ParamCheck> params;             ///< hidden parameters the workflow named
+  std::array<double, 2> position_before_m{};  ///< final position error of each replay, before
+  std::array<double, 2> position_after_m{};
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;  ///< CPU time of this thread's analysis
   std::string error;        ///< the workflow threw: its message (the case counts as wrong)

@@ -156,7 +156,7 @@ struct Row {
   std::vector<double> true_wheel_rad;     ///< wheel angles
   std::vector<double> true_steer_rad;     ///< true steering angles (unwrapped)
   std::vector<double> contact_speed_mps;  ///< ground speed of each contact along its heading
-  std::vector<double> contact_travel_m;  ///< its integral since the start
+  std::vector<double> contact_travel_m;   ///< its integral since the start
 };
 std::vector<Row> simulate(const RunSpec& spec);
 
