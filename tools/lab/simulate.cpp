@@ -119,6 +119,7 @@ int run_simulate(const SimulateOptions& o) {
   header.gyro_mean_over_row = true;
   // The world's truth is stamped on the simulation's own clock.
   header.comments.push_back("truth_clock: shared");
+  header.comments.push_back("truth_frame: robot");
   header.comments.push_back("source: swivel-lab simulate, trajectory " + o.trajectory + ", rate " +
                             format(o.rate_hz) + " Hz, seed " + std::to_string(o.seed) + ", noise " +
                             o.noise);

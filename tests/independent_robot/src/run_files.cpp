@@ -35,6 +35,7 @@ std::string run_log_csv(const RunSpec& spec, const RunRecord& record) {
   out += "# gyro_wz: mean over the row\n";
   // Its motion capture is the simulated truth, stamped on the same clock as the encoders.
   out += "# truth_clock: shared\n";
+  out += "# truth_frame: robot\n";
   out += "# source: swivel-independent-run (independent robot generator), seed " +
          std::to_string(spec.seed) + "\n";
   out += "t,cmd_vx,cmd_vy,cmd_wz";

@@ -43,9 +43,9 @@ TEST_P(RunLogFormat, ParsesWithTheProjectsReaderAndCarriesEveryColumnAtItsRowsTi
   const swivel::RunLog log = parse(csv);
   const bool swpc = c->spec.robot == Robot::kSwpc4;
 
-  // The fixed lines, the declarations (what gyro_wz means in time, the motion capture's clock)
-  // and the generator's comment, then the header row.
-  const std::vector<std::string> head = lines_of(csv, swpc ? 8 : 7);
+  // The fixed lines, the declarations (what gyro_wz means in time, the motion capture's clock
+  // and frame) and the generator's comment, then the header row.
+  const std::vector<std::string> head = lines_of(csv, swpc ? 9 : 8);
   EXPECT_EQ(head[0], "# swivel-run 1");
   EXPECT_EQ(head[1], "# robot: " + c->robot);
   EXPECT_EQ(head[2], swpc ? "# drivetrain: swpc" : "# drivetrain: differential");
@@ -119,11 +119,12 @@ TEST(RunLogFormat, NamesTheGeneratorButNotTheTrueRobot) {
   RunSpec spec = c->spec;
   spec.duration_s = 5.0;
   const swivel::RunLog log = parse(generate(spec).run_csv);
-  // Besides the generator, only the motion capture's clock (`truth_clock: shared`, which the
-  // model-gap workflow reads from the comments).
-  ASSERT_EQ(log.header.comments.size(), 2U);
+  // Besides the generator, only the motion capture's clock and frame (`truth_clock: shared`,
+  // `truth_frame: robot`, which the model-gap workflow reads from the comments).
+  ASSERT_EQ(log.header.comments.size(), 3U);
   EXPECT_EQ(log.header.comments[0], "truth_clock: shared");
-  EXPECT_EQ(log.header.comments[1],
+  EXPECT_EQ(log.header.comments[1], "truth_frame: robot");
+  EXPECT_EQ(log.header.comments[2],
             "source: swivel-independent-run (independent robot generator), seed 108");
 }
 

@@ -100,7 +100,7 @@ HeldOutGap held_out_gap(const RobotModel& model, const RunData& run, const GapOp
   const QuestionResult q =
       analyse_question(Question::kSensorToPose, model, replay, {}, options.question);
   std::vector<Pose2> path;
-  sensors.path(sim::resolve_plant(model), TruthNuisance::from(q.nuisance), path);
+  sensors.path(sim::resolve_plant(model), sensors.truth(q.nuisance), path);
   const PoseGap g = compare_paths(Question::kSensorToPose, run, path, path);
   return {run.source, g.rms_position_m_before, g.rms_heading_rad_before};
 }

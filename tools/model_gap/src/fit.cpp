@@ -34,10 +34,27 @@ struct InformationSplit {
   Eigen::MatrixXd null_space;  ///< projector onto the combinations not fixed, y units
 };
 
-InformationSplit split_information(const Eigen::MatrixXd& information) {
+InformationSplit split_information(const Eigen::MatrixXd& information, bool scale_free) {
   const Eigen::Index p = information.rows();
   InformationSplit out;
   out.d = Eigen::VectorXd::Ones(p);
+  if (!scale_free) {
+    // In the parameters' own units (z: value / typical magnitude).
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(information);
+    const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+    out.inverse = Eigen::MatrixXd::Zero(p, p);
+    out.null_space = Eigen::MatrixXd::Zero(p, p);
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const Eigen::VectorXd v = eig.eigenvectors().col(k);
+      const double lambda = eig.eigenvalues()(k);
+      if (lambda > kWeakInformation * top && lambda > 0.0) {
+        out.inverse += v * v.transpose() / lambda;
+      } else {
+        out.null_space += v * v.transpose();
+      }
+    }
+    return out;
+  }
   const double largest = p > 0 ? information.diagonal().maxCoeff() : 0.0;
   const auto informed = [&information, largest](Eigen::Index a) {
     return information(a, a) > kNoInformation * largest && information(a, a) > 0.0;
@@ -277,7 +294,8 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
-                                        std::size_t window_count, std::vector<char>& observable) {
+                                        std::size_t window_count, std::vector<char>& observable,
+                                        bool scale_free) {
   const auto pp = static_cast<Eigen::Index>(p);
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
   Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
@@ -327,7 +345,7 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   const double windows = static_cast<double>(std::count(used.begin(), used.end(), 1));
   if (windows > static_cast<double>(p) + 1.0) omega *= windows / (windows - static_cast<double>(p));
 
-  const InformationSplit split = split_information(bread);
+  const InformationSplit split = split_information(bread, scale_free);
   const Eigen::MatrixXd& inverse = split.inverse;
   const Eigen::MatrixXd& null_space = split.null_space;
   const Eigen::MatrixXd cov = inverse * omega * inverse;
@@ -364,6 +382,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   const std::size_t p = specs.size();
   std::vector<double> z(p);
   for (std::size_t j = 0; j < p; ++j) z[j] = specs[j].initial / specs[j].scale;
+  const bool scale_free =
+      std::any_of(specs.begin(), specs.end(), [](const ParamSpec& s) { return s.scale_free; });
 
   auto* cost = new ReplayCost(problem, specs, options.step);
   ceres::Problem solver_problem;
@@ -408,7 +428,7 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                                                   pp);
       information.noalias() += row * row.transpose();
     }
-    const InformationSplit split = split_information(information);
+    const InformationSplit split = split_information(information, scale_free);
     Eigen::VectorXd offset(pp);
     for (std::size_t j = 0; j < p; ++j) {
       const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
@@ -431,8 +451,9 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   if (!out.ok || !have_jacobian) return out;
   std::vector<std::size_t> groups = problem.row_group;
   if (groups.empty()) groups.assign(problem.row_count, 0);
-  const std::vector<double> cov_z = sandwich_covariance(
-      dense, p, out.residuals, problem.row_window, groups, problem.window_count, out.observable);
+  const std::vector<double> cov_z =
+      sandwich_covariance(dense, p, out.residuals, problem.row_window, groups, problem.window_count,
+                          out.observable, scale_free);
   // The same, as if the rows were independent.
   {
     const auto pp = static_cast<Eigen::Index>(p);
@@ -443,7 +464,7 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
       bread.noalias() += row * row.transpose();
     }
     const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
-    Eigen::MatrixXd naive = split_information(bread).inverse * (out.rss / dof);
+    Eigen::MatrixXd naive = split_information(bread, scale_free).inverse * (out.rss / dof);
     out.naive_sigmas.resize(p);
     out.naive_covariance.resize(p * p);
     for (std::size_t a = 0; a < p; ++a) {

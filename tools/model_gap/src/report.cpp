@@ -112,8 +112,9 @@ json report_json(const GapResult& r) {
   {
     json truth = json::object();
     for (std::size_t i = 0; i < std::min(r.truth_names.size(), r.sensor.nuisance.size()); ++i) {
-      const double sigma =
-          i < r.sensor.nuisance_sigmas.size() ? r.sensor.nuisance_sigmas[i] : std::numeric_limits<double>::infinity();
+      const double sigma = i < r.sensor.nuisance_sigmas.size()
+                               ? r.sensor.nuisance_sigmas[i]
+                               : std::numeric_limits<double>::infinity();
       truth[r.truth_names[i]] = {{"value", r.sensor.nuisance[i]},
                                  {"sigma", std::isfinite(sigma) ? json(sigma) : json(nullptr)}};
     }

@@ -7,6 +7,7 @@
 #include <limits>
 #include <span>
 #include <stdexcept>
+#include <string>
 
 #include "swivel/differential/differential_kinematics.hpp"
 #include "swivel/localization/eg_odometry.hpp"
@@ -41,17 +42,6 @@ void check_run_fits_model(const RobotModel& model, const RunData& run) {
     throw std::invalid_argument("run " + run.source + " has " + std::to_string(run.size()) +
                                 " samples; the workflow needs at least 10");
   }
-}
-
-TruthNuisance TruthNuisance::from(std::span<const double> values) {
-  TruthNuisance n;
-  if (values.size() > 0) n.yaw_offset_rad = values[0];
-  if (values.size() > 2) {
-    n.lever_x_m = values[1];
-    n.lever_y_m = values[2];
-  }
-  if (values.size() > 3) n.time_offset_s = values[3];
-  return n;
 }
 
 Pose2 run_start_pose(const RunData& run) {
@@ -93,6 +83,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
   gyro_ = run.has_gyro;
   fit_time_offset_ = !run.truth_clock_shared;
+  fit_body_offset_ = !run.truth_frame_is_robot;
   modules_ = run.module_count;
   start_ = run_start_pose(run);
   const std::size_t n = run.size();
@@ -115,13 +106,16 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   add("dead_reckoning.dy_m", "m", ChannelKind::kPosition);
   if (gyro_) add("dead_reckoning.dyaw_gyro_rad", "rad", ChannelKind::kHeading);
   add("dead_reckoning.dyaw_encoders_rad", "rad", ChannelKind::kHeading);
-  // Scales (what a fit step moves): half a degree, a centimetre, ten milliseconds; of like
-  // effect on the residuals, so that no one of them looks uninformed beside the others.
-  nuisance_.push_back({"truth.yaw_offset_rad", 0.0, 1e-2, -0.2, 0.2});
-  nuisance_.push_back({"truth.lever_x_m", 0.0, 1e-2, -0.5, 0.5});
-  nuisance_.push_back({"truth.lever_y_m", 0.0, 1e-2, -0.5, 0.5});
+  // Scales (what a fit step moves): half a degree, a centimetre, ten milliseconds. Their units
+  // are unrelated to the effects': fits with them judge observability scale-free.
+  if (fit_body_offset_) {
+    nuisance_.push_back({"truth.yaw_offset_rad", 0.0, 1e-2, -0.2, 0.2, kNaN, true});
+    nuisance_.push_back({"truth.lever_x_m", 0.0, 1e-2, -0.5, 0.5, kNaN, true});
+    nuisance_.push_back({"truth.lever_y_m", 0.0, 1e-2, -0.5, 0.5, kNaN, true});
+  }
   if (fit_time_offset_)
-    nuisance_.push_back({"truth.time_offset_s", 0.0, 1e-2, -kMaxTimeOffsetS, kMaxTimeOffsetS});
+    nuisance_.push_back(
+        {"truth.time_offset_s", 0.0, 1e-2, -kMaxTimeOffsetS, kMaxTimeOffsetS, kNaN, true});
 
   // The windows leave room at the ends for the longest shift a fit may try.
   const double lead = fit_time_offset_ ? kMaxTimeOffsetS : 0.0;
@@ -135,6 +129,18 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
+}
+
+TruthNuisance SensorReplay::truth(std::span<const double> values) const {
+  TruthNuisance n;
+  for (std::size_t i = 0; i < std::min(values.size(), nuisance_.size()); ++i) {
+    const std::string& name = nuisance_[i].name;
+    if (name == "truth.yaw_offset_rad") n.yaw_offset_rad = values[i];
+    if (name == "truth.lever_x_m") n.lever_x_m = values[i];
+    if (name == "truth.lever_y_m") n.lever_y_m = values[i];
+    if (name == "truth.time_offset_s") n.time_offset_s = values[i];
+  }
+  return n;
 }
 
 bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,

@@ -185,8 +185,7 @@ QuestionReplay sensor_question_replay(const SensorReplay& sensors, const RobotMo
   sq.windows = w;
   sq.residuals = [&sensors](const RobotModel& model, std::span<const double> nuisance,
                             std::vector<double>& out, std::size_t window_limit) {
-    return sensors.residuals(sim::resolve_plant(model), TruthNuisance::from(nuisance), out,
-                             window_limit);
+    return sensors.residuals(sim::resolve_plant(model), sensors.truth(nuisance), out, window_limit);
   };
   sq.nuisance = sensors.nuisance();
   sq.fit_nuisance_before_noise = true;
@@ -300,6 +299,13 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   const MotionPeaks peaks = motion_peaks(run, robot_path);
   std::vector<Candidate> sensor_library =
       candidate_library(nominal, Question::kSensorToPose, peaks);
+  if (sensors.fits_body_offset() && nominal.drivetrain == DrivetrainKind::kSwpc) {
+    result.notes.push_back(
+        "The tracked body's yaw offset is fitted (the log does not declare `# truth_frame: "
+        "robot`): on an SWPC robot it trades against the part of the steering offsets common to "
+        "every module, which only turning separates; a steering offset is fixed mainly in its "
+        "differences between modules.");
+  }
   const bool turns_of_one_kind = spin_share_spread(run) < kMinSpinShareSpread;
   if (turns_of_one_kind && nominal.drivetrain == DrivetrainKind::kDifferential) {
     result.notes.push_back(
@@ -314,7 +320,7 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   });
   result.sensor =
       analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, options.question);
-  result.truth = TruthNuisance::from(result.sensor.nuisance);
+  result.truth = sensors.truth(result.sensor.nuisance);
   result.truth_names.clear();
   for (const ParamSpec& p : sensors.nuisance()) result.truth_names.push_back(p.name);
   // The command question starts from what the sensors showed, unless they showed something

@@ -31,6 +31,10 @@ struct ParamSpec {
   /// Where a combination of parameters the run cannot fix is left (the nominal model's own
   /// value); NaN: at `initial`.
   double anchor = std::numeric_limits<double>::quiet_NaN();
+  /// Lives on a scale unrelated to the effects' (a motion-capture body's offset): with such a
+  /// parameter in a fit, the combinations the run does not fix are judged scale-free (on the
+  /// information scaled to a unit diagonal), so that its units cannot hide an effect.
+  bool scale_free = false;
 };
 
 /// Whitened residual rows for parameter values `theta` (same order as the specs); NaN for a
@@ -87,11 +91,14 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
 /// (`row_window`) and to channels (`row_group`, one time series each). Rows with a non-finite
 /// residual are skipped. Returns p x p row-major on the observable subspace; `observable`
 /// flags the parameters the rows determine.
+/// `scale_free`: judge the combinations not fixed on the information scaled to a unit diagonal
+/// (ParamSpec::scale_free), else against the largest eigenvalue in the parameters' own units.
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
-                                        std::size_t window_count, std::vector<char>& observable);
+                                        std::size_t window_count, std::vector<char>& observable,
+                                        bool scale_free = false);
 
 /// Significance of a chi-square statistic with `dof` degrees of freedom as the equivalent
 /// normal deviate (from the exact upper tail, the regularized incomplete gamma function):

@@ -37,6 +37,9 @@ struct RunData {
   /// The motion capture is stamped on the robot's own clock (`# truth_clock: shared`, e.g.
   /// a simulator's): its time offset is known to be zero and is not fitted.
   bool truth_clock_shared = false;
+  /// The motion capture reports the robot's own reference frame (`# truth_frame: robot`, e.g.
+  /// a simulator's truth): the tracked body's offset on the robot is known to be zero.
+  bool truth_frame_is_robot = false;
 
   [[nodiscard]] std::size_t size() const { return t_s.size(); }
   [[nodiscard]] CommandSeries commands() const {

@@ -21,6 +21,8 @@
 //                          encoders' (either sign); fitted only when the run does not declare
 //                          a shared clock (`# truth_clock: shared`), since in this question it
 //                          cannot be told from a sensor latency
+// A run whose truth is the robot's own reference frame (`# truth_frame: robot`, a simulator's)
+// fits neither the yaw offset nor the lever arm.
 
 #include <span>
 #include <vector>
@@ -43,8 +45,6 @@ struct TruthNuisance {
 
   /// The tracked body's pose in the robot frame.
   [[nodiscard]] Pose2 body() const { return Pose2{lever_x_m, lever_y_m, yaw_offset_rad}; }
-  /// From the nuisance values in SensorReplay::nuisance() order.
-  static TruthNuisance from(std::span<const double> values);
 };
 
 class SensorReplay {
@@ -66,6 +66,11 @@ class SensorReplay {
   [[nodiscard]] bool uses_gyro() const { return gyro_; }
   /// The motion capture's clock offset is fitted (the run does not declare a shared clock).
   [[nodiscard]] bool fits_time_offset() const { return fit_time_offset_; }
+  /// The tracked body's offset on the robot is fitted (the run does not declare that its
+  /// truth is the robot's frame).
+  [[nodiscard]] bool fits_body_offset() const { return fit_body_offset_; }
+  /// The nuisance values (nuisance() order) as a TruthNuisance; those not fitted are zero.
+  [[nodiscard]] TruthNuisance truth(std::span<const double> values) const;
 
   [[nodiscard]] const std::vector<ChannelInfo>& channels() const { return channels_; }
   [[nodiscard]] const std::vector<Window>& windows() const { return windows_; }
@@ -100,6 +105,7 @@ class SensorReplay {
   bool swpc_ = false;
   bool gyro_ = true;
   bool fit_time_offset_ = true;
+  bool fit_body_offset_ = true;
   std::size_t modules_ = 2;
   std::vector<ParamSpec> nuisance_;
   Pose2 start_;
