@@ -527,6 +527,15 @@ case_daemon_warns_before_its_identity_expires() {
   local dir="$work/short"
   SWIVEL_SERVICE_GROUP='' SWIVEL_IDENTITY_DAYS=10 "$scripts/make_profile.sh" "$dir" >/dev/null
   start_swiveld "file://$dir/identities/swiveld/cyclonedds.xml" "swiveld with a 10-day identity"
+  # A tool warns too, on stderr: its standard output stays its data.
+  CYCLONEDDS_URI="file://$dir/identities/swivelctl/cyclonedds.xml" "${SWIVEL_SWIVELCTL:?}" \
+    echo state --json --count 1 --timeout 15 --domain "${SWIVEL_TEST_DOMAIN:?}" \
+    >"$work/out" 2>"$work/err" || { cat "$work/out" "$work/err" >&2; fail "swivelctl with a 10-day identity read no state"; }
+  grep -q '^warning: DDS Security: the permissions .* in 9 days' "$work/err" ||
+    { cat "$work/err" >&2; fail "swivelctl does not warn on stderr that its identity expires"; }
+  [[ $(head -c 1 "$work/out") == "{" ]] && ! grep -q 'DDS Security' "$work/out" ||
+    { cat "$work/out" >&2; fail "swivelctl's JSON output carries the warning"; }
+  echo "ok: swivelctl with a 10-day identity warns on stderr; its JSON on stdout is clean"
   stop_swiveld
   grep 'DDS Security: the permissions' "$work/robot.log" | sed 's/^/    robot| /'
   grep -qE "warning: DDS Security: the permissions $dir/identities/swiveld/permissions.p7s .* expire on [0-9T:-]+ UTC, in 9 days" \

@@ -171,6 +171,18 @@ std::string unreadable_files(const std::string& config_uri) {
   return causes;
 }
 
+// A warning or error for the program's log. The daemon installs its own logger (stderr, in
+// the journal); a tool that keeps spdlog's unnamed default logger writes to stdout, which may
+// carry its output (swivelctl --json), so there the line goes to stderr instead.
+void report(spdlog::level::level_enum level, const std::string& message) {
+  if (!spdlog::default_logger()->name().empty()) {
+    spdlog::log(level, "{}", message);
+    return;
+  }
+  std::fprintf(stderr, "%s: %s\n", level == spdlog::level::err ? "error" : "warning",
+               message.c_str());
+}
+
 // Warns when the DDS Security permissions of this participant (make_permissions.sh gives them
 // its certificate's validity) expire within kExpiryWarningDays, or have.
 constexpr int kExpiryWarningDays = 30;
@@ -193,16 +205,17 @@ void warn_if_expiring(const std::string& config_uri) {
       std::chrono::duration_cast<std::chrono::hours>(expires - std::chrono::system_clock::now());
   const long days = static_cast<long>(left.count() / 24);
   if (left.count() < 0) {
-    spdlog::error(
-        "DDS Security: the permissions {} expired on {} UTC: renew the identity and its "
-        "permissions (services/security/README.md, \"Rotate and revoke\")",
-        permissions[1].str(), not_after[1].str());
+    report(spdlog::level::err, "DDS Security: the permissions " + permissions[1].str() +
+                                   " expired on " + not_after[1].str() +
+                                   " UTC: renew the identity and its permissions "
+                                   "(services/security/README.md, \"Rotate and revoke\")");
   } else if (days < kExpiryWarningDays) {
-    spdlog::warn(
-        "DDS Security: the permissions {} (and, from make_permissions.sh, the identity's "
-        "certificate) expire on {} UTC, in {} days: renew them before then "
-        "(services/security/README.md, \"Rotate and revoke\")",
-        permissions[1].str(), not_after[1].str(), days);
+    report(spdlog::level::warn,
+           "DDS Security: the permissions " + permissions[1].str() +
+               " (and, from make_permissions.sh, the identity's certificate) expire on " +
+               not_after[1].str() + " UTC, in " + std::to_string(days) +
+               " days: renew them before then (services/security/README.md, \"Rotate and "
+               "revoke\")");
   }
 }
 
