@@ -136,7 +136,7 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     return std::filesystem::path(runs[k].source).parent_path().string();
   };
   for (std::size_t i = 0; i < n; ++i) {
-    if (!usable[i]) {
+    if (usable[i] == 0) {
       tell("skipped " + runs[i].source);
       continue;
     }
@@ -152,7 +152,7 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     if (f.verdict == Verdict::kNamed) ++result.named;
     if (f.verdict == Verdict::kNoSignificantGap) ++result.no_gap;
     for (std::size_t j = 0; j < n; ++j) {
-      if (j == i || !usable[j] || session(j) != session(i)) continue;
+      if (j == i || usable[j] == 0 || session(j) != session(i)) continue;
       // A run that named nothing predicts the others exactly as the nominal model does.
       const double gap = f.named.empty() ? nominal_gap[j]
                                          : held_out_gap(f.fitted, runs[j], options).rms_position_m;

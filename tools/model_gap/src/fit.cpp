@@ -145,7 +145,7 @@ class ReplayCost final : public ceres::CostFunction {
 
 double bic(double rss, std::size_t n, std::size_t k) {
   if (n == 0) return 0.0;
-  const double nn = static_cast<double>(n);
+  const auto nn = static_cast<double>(n);
   return nn * std::log(std::max(rss, 1e-300) / nn) + static_cast<double>(k) * std::log(nn);
 }
 
@@ -273,9 +273,13 @@ Autocorrelation fit_autocorrelation(const std::vector<double>& series) {
   }
   const double noise = 1.0 / std::sqrt(n);
   if (!(rho[1] > 2.0 * noise)) return out;
-  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, m = 0.0;
+  double sx = 0.0;
+  double sy = 0.0;
+  double sxx = 0.0;
+  double sxy = 0.0;
+  double m = 0.0;
   for (std::size_t l = 1; l <= kLags && rho[l] > noise; ++l) {
-    const double x = static_cast<double>(l);
+    const auto x = static_cast<double>(l);
     sx += x;
     sy += std::log(rho[l]);
     sxx += x * x;
@@ -302,7 +306,7 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   std::size_t groups = 0;
   for (std::size_t g : row_group) groups = std::max(groups, g + 1);
   // Per group: its rows by window (npos where it has none).
-  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  constexpr auto kNone = static_cast<std::size_t>(-1);
   std::vector<std::vector<std::size_t>> rows_of(groups,
                                                 std::vector<std::size_t>(window_count, kNone));
   std::vector<char> used(window_count, 0);
@@ -328,8 +332,10 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
     const Autocorrelation ac = fit_autocorrelation(series);
     if (ac.c <= 0.0 || n == 0.0) continue;
     s2 /= n;
-    double weight = ac.c * ac.phi;
-    for (std::size_t l = 1; l < window_count && weight > 1e-4; ++l, weight *= ac.phi) {
+    for (std::size_t l = 1; l < window_count; ++l) {
+      // c phi^l: the lag's share of the variance.
+      const double weight = ac.c * std::pow(ac.phi, static_cast<double>(l));
+      if (weight <= 1e-4) break;
       Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(pp, pp);
       for (std::size_t j = l; j < window_count; ++j) {
         const std::size_t a = rows_of[g][j];
@@ -481,7 +487,8 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
     for (std::size_t b = 0; b < p; ++b) {
       out.covariance[a * p + b] = cov_z[a * p + b] * specs[a].scale * specs[b].scale;
     }
-    out.sigmas[a] = out.observable[a] ? std::sqrt(std::max(out.covariance[a * p + a], 0.0)) : kInf;
+    out.sigmas[a] =
+        out.observable[a] != 0 ? std::sqrt(std::max(out.covariance[a * p + a], 0.0)) : kInf;
   }
   return out;
 }

@@ -52,10 +52,9 @@ Pose2 run_start_pose(const RunData& run) {
   // A run without commands is at rest until a wheel has turned by more than an encoder's
   // worth of noise.
   const auto wheels_moved = [&run](std::size_t k) {
-    for (const std::vector<double>& wheel : run.wheel_rad) {
-      if (std::abs(wheel[k] - wheel[0]) > 1e-2) return true;
-    }
-    return false;
+    return std::ranges::any_of(run.wheel_rad, [k](const std::vector<double>& wheel) {
+      return std::abs(wheel[k] - wheel[0]) > 1e-2;
+    });
   };
   for (std::size_t k = 0; k < run.size(); ++k) {
     const bool moving =
@@ -78,13 +77,13 @@ Pose2 run_start_pose(const RunData& run) {
 }
 
 SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double window_s)
-    : run_(&run) {
+    : run_(&run),
+      swpc_(run.drivetrain == DrivetrainKind::kSwpc),
+      gyro_(run.has_gyro),
+      fit_time_offset_(!run.truth_clock_shared),
+      fit_body_offset_(!run.truth_frame_is_robot),
+      modules_(run.module_count) {
   check_run_fits_model(nominal, run);
-  swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
-  gyro_ = run.has_gyro;
-  fit_time_offset_ = !run.truth_clock_shared;
-  fit_body_offset_ = !run.truth_frame_is_robot;
-  modules_ = run.module_count;
   start_ = run_start_pose(run);
   const std::size_t n = run.size();
   // Smoothed wheel rates (centred over +-2 samples) keep encoder quantization out of the
@@ -264,10 +263,7 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
     if (gyro_) out[2 * w + j] = (mb.yaw_rad - ma.yaw_rad) - (predicted.yaw_rad);
     out[encoder_channel * w + j] = (mb.yaw_rad - ma.yaw_rad) - encoder_turn;
   }
-  for (double v : out) {
-    if (std::isinf(v)) return false;
-  }
-  return true;
+  return std::ranges::none_of(out, [](double v) { return std::isinf(v); });
 }
 
 void SensorReplay::path(const sim::PlantParams& plant, const TruthNuisance& truth,

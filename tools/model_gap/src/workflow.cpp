@@ -41,7 +41,9 @@ std::vector<double> derivative(const std::vector<double>& t, const std::vector<d
 // How hard the robot accelerated and steered in the run (the limits' starting values).
 MotionPeaks motion_peaks(const RunData& run, const std::vector<Pose2>& path) {
   const std::size_t n = run.size();
-  std::vector<double> vx(n), vy(n), yaw(n);
+  std::vector<double> vx(n);
+  std::vector<double> vy(n);
+  std::vector<double> yaw(n);
   for (std::size_t k = 0; k < n; ++k) {
     vx[k] = path[k].x_m;
     vy[k] = path[k].y_m;
@@ -73,7 +75,11 @@ PoseGap pose_gap(Question q, const RunData& run, const std::vector<Pose2>& befor
                  const std::vector<Pose2>& after) {
   PoseGap g;
   g.question = q;
-  double sb = 0.0, sa = 0.0, hb = 0.0, ha = 0.0, count = 0.0;
+  double sb = 0.0;
+  double sa = 0.0;
+  double hb = 0.0;
+  double ha = 0.0;
+  double count = 0.0;
   for (std::size_t k = 0; k < run.size(); ++k) {
     if (!std::isfinite(run.truth_x_m[k]) || !std::isfinite(before[k].x_m) ||
         !std::isfinite(after[k].x_m))
@@ -262,12 +268,12 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
 
   const SensorReplay sensors(nominal, run, options.window_s);
   if (!sensors.uses_gyro()) {
-    result.notes.push_back(
+    result.notes.emplace_back(
         "The run has no gyro: the dead reckoning takes its heading from the encoders, and the "
         "gyro channel and the gyro_bias and gyro_scale candidates are left out.");
   }
   if (sensors.fits_time_offset()) {
-    result.notes.push_back(
+    result.notes.emplace_back(
         "The run does not declare a shared clock for motion capture (`# truth_clock: shared`): "
         "the motion capture's time offset is fitted, and sensor_latency, which this question "
         "cannot tell from it, is not a candidate.");
@@ -300,7 +306,7 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   std::vector<Candidate> sensor_library =
       candidate_library(nominal, Question::kSensorToPose, peaks);
   if (sensors.fits_body_offset() && nominal.drivetrain == DrivetrainKind::kSwpc) {
-    result.notes.push_back(
+    result.notes.emplace_back(
         "The tracked body's yaw offset is fitted (the log does not declare `# truth_frame: "
         "robot`): on an SWPC robot it trades against the part of the steering offsets common to "
         "every module, which only turning separates; a steering offset is fixed mainly in its "
@@ -308,7 +314,7 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   }
   const bool turns_of_one_kind = spin_share_spread(run) < kMinSpinShareSpread;
   if (turns_of_one_kind && nominal.drivetrain == DrivetrainKind::kDifferential) {
-    result.notes.push_back(
+    result.notes.emplace_back(
         "The run turns in one way only (on the spot, or on arcs of one kind): a turn-dependent "
         "track (track_scrub) cannot be told from a track width, and is not a candidate.");
   }
