@@ -21,7 +21,8 @@
 // cannot use it: slip, actuator_lag, steering_lag (the drivetrains command rates and
 // integrate the encoders as rolling without slip; nothing in the robot model describes the
 // actuators' response), sensor_latency (the robot model has no latency parameter and the
-// localizations integrate each reading as of the cycle it arrives in).
+// localizations integrate each reading as of the cycle it arrives in), track_scrub (the robot
+// model has one track width for every kind of turn).
 
 #include <string>
 #include <vector>
