@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "gap_options.hpp"
 #include "swivel/model_gap/workflow.hpp"
 #include "swivel/robot_model_io.hpp"
 
@@ -70,20 +71,10 @@ void add_gap_command(CLI::App& app, int& exit_code) {
       "gap",
       "Compare a run with its replay by the nominal model, name the missing effect, fit it "
       "and show the gap before and after");
-  cmd->add_option("--model", options->model_file, "nominal robot model (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
   cmd->add_option("--run", options->run_file, "measured run log (CSV)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", options->out_dir, "report directory (created)")->required();
-  cmd->add_option("--window", options->gap.window_s, "length of the windows compared, s")
-      ->capture_default_str()
-      ->check(CLI::Range(0.2, 10.0));
-  cmd->add_option("--min-sigma", options->gap.question.min_z_name,
-                  "significance (normal deviates) an effect needs to be named")
-      ->capture_default_str()
-      ->check(CLI::Range(2.0, 20.0));
+  add_shared_gap_options(cmd, options->model_file, options->out_dir, options->gap);
   cmd->add_flag(
       "--sensor-only", options->gap.sensor_only,
       "decide only the sensor-to-pose question (for runs whose commands were not logged)");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "gap_options.hpp"
 #include "swivel/model_gap/cross_run.hpp"
 #include "swivel/robot_model_io.hpp"
 
@@ -69,17 +70,7 @@ void add_gap_cross_command(CLI::App& app, int& exit_code) {
       "gap-cross",
       "Fit the sensor-to-pose question on each run of one robot and judge the fitted model on "
       "its other runs; check that the named values agree across runs");
-  cmd->add_option("--model", options->model_file, "nominal robot model (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--out", options->out_dir, "report directory (created)")->required();
-  cmd->add_option("--window", options->gap.window_s, "length of the windows compared, s")
-      ->capture_default_str()
-      ->check(CLI::Range(0.2, 10.0));
-  cmd->add_option("--min-sigma", options->gap.question.min_z_name,
-                  "significance (normal deviates) an effect needs to be named")
-      ->capture_default_str()
-      ->check(CLI::Range(2.0, 20.0));
+  add_shared_gap_options(cmd, options->model_file, options->out_dir, options->gap);
   cmd->add_option("runs", options->run_files,
                   "run logs (CSV) of one robot, at least two; a run is judged on the others in "
                   "its folder (its session)")

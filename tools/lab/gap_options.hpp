@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The options `swivel-lab gap` and `swivel-lab gap-cross` share: the nominal model, the report
+// directory and how the workflow decides (tools/lab/GAP.md).
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "swivel/model_gap/workflow.hpp"
+
+namespace swivel::lab {
+
+inline void add_shared_gap_options(CLI::App* cmd, std::string& model_file, std::string& out_dir,
+                                   model_gap::GapOptions& gap) {
+  cmd->add_option("--model", model_file, "nominal robot model (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", out_dir, "report directory (created)")->required();
+  cmd->add_option("--window", gap.window_s, "length of the windows compared, s")
+      ->capture_default_str()
+      ->check(CLI::Range(0.2, 10.0));
+  cmd->add_option("--min-sigma", gap.question.min_z_name,
+                  "significance (normal deviates) an effect needs to be named")
+      ->capture_default_str()
+      ->check(CLI::Range(2.0, 20.0));
+}
+
+}  // namespace swivel::lab
