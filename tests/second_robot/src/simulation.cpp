@@ -266,7 +266,7 @@ class Robot {
 // The state at every tick, for sampling at the rows' times.
 class History {
  public:
-  explicit History(std::size_t n) : n_(n), width_(6 + 4 * n) {}
+  explicit History(std::size_t n) : n_(n), width_(6 + 5 * n) {}
   void push(const State& s) {
     for (double v : s.pose) data_.push_back(v);
     for (double v : s.twist) data_.push_back(v);
@@ -274,6 +274,7 @@ class History {
     for (std::size_t i = 0; i < n_; ++i) data_.push_back(s.phi[i]);
     for (std::size_t i = 0; i < n_; ++i) data_.push_back(s.ground[i]);
     for (std::size_t i = 0; i < n_; ++i) data_.push_back(s.travel[i]);
+    for (std::size_t i = 0; i < n_; ++i) data_.push_back(s.phi_ref[i] - s.phi[i]);
   }
   [[nodiscard]] std::size_t ticks() const { return data_.size() / width_; }
   /// Linear interpolation between ticks; t clamped to the recorded span.
@@ -293,6 +294,7 @@ class History {
   [[nodiscard]] std::size_t phi(std::size_t i) const { return 6 + n_ + i; }
   [[nodiscard]] std::size_t ground(std::size_t i) const { return 6 + 2 * n_ + i; }
   [[nodiscard]] std::size_t travel(std::size_t i) const { return 6 + 3 * n_ + i; }
+  [[nodiscard]] std::size_t servo_error(std::size_t i) const { return 6 + 4 * n_ + i; }
 
  private:
   std::size_t n_;
@@ -414,6 +416,7 @@ std::vector<Row> simulate(const RunSpec& spec) {
       row.wheel_rad.push_back(quantize(late[History::psi(i)], wheel_counts));
       row.contact_speed_mps.push_back(now[history.ground(i)]);
       row.contact_travel_m.push_back(now[history.travel(i)]);
+      if (swpc) row.steering_servo_error_rad.push_back(now[history.servo_error(i)]);
       if (swpc) {
         row.true_steer_rad.push_back(now[history.phi(i)]);
         row.steer_rad.push_back(

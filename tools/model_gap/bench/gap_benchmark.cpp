@@ -104,7 +104,13 @@ void print_runs(const std::vector<CaseOutcome>& outcomes) {
         o.correct ? (o.kind == RunKind::kLibrary && !o.values_within_3_sigma ? "name ok, value off"
                                                                              : "yes")
                   : "NO");
-    if (!o.correct) std::printf("    %s\n", o.problem.c_str());
+    if (!o.correct) {
+      std::printf("    %s\n", o.problem.c_str());
+      for (std::size_t q = 0; q < 2; ++q) {  // what the question saw, misfit channel included
+        if (o.verdict[q] != Verdict::kNoSignificantGap)
+          std::printf("    %s\n", o.summary[q].c_str());
+      }
+    }
     for (const auto& p : o.params) {
       std::printf("    %s.%s: truth %.6g, fitted %.6g +- %.2g (%.1f sigma)\n", p.effect.c_str(),
                   p.key.c_str(), p.truth, p.value, p.sigma, p.deviation());

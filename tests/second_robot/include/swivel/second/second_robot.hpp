@@ -152,11 +152,12 @@ struct Row {
   double mocap[3] = {0, 0, 0};
   // Truth at t (not written).
   double pose[3] = {0, 0, 0};
-  double twist[3] = {0, 0, 0};            ///< body frame
-  std::vector<double> true_wheel_rad;     ///< wheel angles
-  std::vector<double> true_steer_rad;     ///< true steering angles (unwrapped)
-  std::vector<double> contact_speed_mps;  ///< ground speed of each contact along its heading
-  std::vector<double> contact_travel_m;   ///< its integral since the start
+  double twist[3] = {0, 0, 0};                   ///< body frame
+  std::vector<double> true_wheel_rad;            ///< wheel angles
+  std::vector<double> true_steer_rad;            ///< true steering angles (unwrapped)
+  std::vector<double> contact_speed_mps;         ///< ground speed of each contact along its heading
+  std::vector<double> contact_travel_m;          ///< its integral since the start
+  std::vector<double> steering_servo_error_rad;  ///< swpc: servo reference minus true angle
 };
 std::vector<Row> simulate(const RunSpec& spec);
 
