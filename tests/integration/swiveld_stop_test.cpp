@@ -133,7 +133,9 @@ StopRun stop_after_sigterm(const std::string& robot, int domain, const std::stri
 void expect_stop_within(const StopRun& run, double a_max_mps2) {
   EXPECT_EQ(run.exit_code, 0) << run.log;
   EXPECT_NEAR(run.speed_mps, kSpeedMps, 0.005);
-  EXPECT_GE(run.reaction_s, 0.0) << run.log;
+  // The loop stamps a cycle with its scheduled start: a cycle that woke late can take a SIGTERM
+  // sent after its stamp (seen: 9 us), so the reaction may read up to one period negative.
+  EXPECT_GE(run.reaction_s, -1.0 / kRateHz) << run.log;
   EXPECT_LT(run.reaction_s, 0.1) << "SIGTERM took long to start the stop\n" << run.log;
   const double bound_m = kSpeedMps * kSpeedMps / (2.0 * a_max_mps2) + 2.0 * kSpeedMps / kRateHz;
   EXPECT_LE(run.distance_m, bound_m) << run.log;

@@ -279,6 +279,8 @@ class History {
   [[nodiscard]] std::size_t ticks() const { return data_.size() / width_; }
   /// Linear interpolation between ticks; t clamped to the recorded span.
   [[nodiscard]] std::vector<double> at(double t_s) const {
+    // One tick recorded (the first step): nothing to interpolate.
+    if (ticks() < 2) return {data_.begin(), data_.begin() + static_cast<std::ptrdiff_t>(width_)};
     const double x = std::clamp(t_s / kStepS, 0.0, static_cast<double>(ticks() - 1));
     const auto k = std::min(static_cast<std::size_t>(x), ticks() - 2);
     const double f = x - static_cast<double>(k);
