@@ -22,7 +22,7 @@ constexpr double kMaxSteeringOffsetRad = 3.2;
 std::string number(double value) {
   char buffer[32];
   const auto r = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, r.ptr);
+  return {buffer, r.ptr};
 }
 
 double param_or(const EffectParams& params, const std::string& key, double identity) {
@@ -77,17 +77,23 @@ FoldResult fold_effects(const RobotModel& model) {
   RobotModel& out = result.model;
   const bool swpc = model.drivetrain == DrivetrainKind::kSwpc;
 
-  for (const auto& [name, params] : model.effects) {
+  for (const auto& effect : model.effects) {
+    // Named references, not a structured binding: the lambdas below capture them.
+    const std::string& name = effect.first;
+    const EffectParams& params = effect.second;
     std::vector<Change> changes;
     const auto scale = [&](const std::string& key, const std::string& target, double& field) {
       const double s = param_or(params, key, 1.0);
-      changes.push_back({name + "." + key + " = " + number(s), target, &field, field * s});
+      std::string what = name;
+      what.append(".").append(key).append(" = ").append(number(s));
+      changes.push_back({what, target, &field, field * s});
     };
     const auto add = [&](const std::string& key, const std::string& target, double& field,
                          double limit) {
       const double v = param_or(params, key, 0.0);
-      changes.push_back(
-          {name + "." + key + " = " + number(v), target, &field, field + v, -limit, limit, true});
+      std::string what = name;
+      what.append(".").append(key).append(" = ").append(number(v));
+      changes.push_back({what, target, &field, field + v, -limit, limit, true});
     };
     if (name == "gyro_bias") {
       add("bias_rad_s", "sensors.gyro.bias_rad_s", out.sensors.gyro.bias_rad_s, kMaxGyroBiasRadps);

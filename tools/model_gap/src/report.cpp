@@ -241,7 +241,8 @@ std::string plot_script(const GapResult& r) {
 
 bool run_gnuplot(const std::string& dir) {
   const std::string cmd = "cd '" + dir + "' && gnuplot plots.gp > gnuplot.log 2>&1";
-  return std::system(cmd.c_str()) == 0;
+  // gnuplot is a program of its own; the directory is the report's, quoted.
+  return std::system(cmd.c_str()) == 0;  // NOLINT(cert-env33-c)
 }
 
 void question_markdown(std::ostringstream& md, const QuestionResult& q, const QuestionOptions& o) {
@@ -295,11 +296,11 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
   for (const auto& c : q.candidates) {
     md << "| " << c.label() << " | ";
     for (std::size_t i = 0; i < c.param_names.size(); ++i) {
-      md << (i ? ", " : "") << c.param_names[i] << " = " << fmt(c.values[i], 4) << " +- "
+      md << (i > 0 ? ", " : "") << c.param_names[i] << " = " << fmt(c.values[i], 4) << " +- "
          << fmt(c.sigmas[i], 2);
     }
     md << " | ";
-    for (std::size_t i = 0; i < c.z.size(); ++i) md << (i ? ", " : "") << fmt(c.z[i], 3);
+    for (std::size_t i = 0; i < c.z.size(); ++i) md << (i > 0 ? ", " : "") << fmt(c.z[i], 3);
     md << " | " << fmt(c.delta_bic, 5) << " | " << fmt(c.explained, 3) << " |\n";
   }
   md << "\n";
@@ -358,8 +359,8 @@ std::string markdown(const GapResult& r, bool plots) {
   double durations[4] = {0, 0, 0, 0};
   for (const auto& s : r.segments) durations[static_cast<int>(s.kind)] += s.end_s - s.start_s;
   for (int p = 0; p < 4; ++p) {
-    md << (p ? ", " : "") << phase_name(static_cast<PhaseKind>(p)) << " " << fmt(durations[p], 4)
-       << " s";
+    md << (p > 0 ? ", " : "") << phase_name(static_cast<PhaseKind>(p)) << " "
+       << fmt(durations[p], 4) << " s";
   }
   md << ".\n\nSelection: per question, the single effect with the lowest BIC among those "
         "significant at "
