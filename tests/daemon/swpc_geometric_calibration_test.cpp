@@ -151,6 +151,8 @@ class CalibrationRig {
         [this](const dds::CalibrationSample& s) { published.push_back(s); });
     runner_->set_progress_period(0.0);
   }
+  CalibrationRig(const CalibrationRig&) = delete;
+  CalibrationRig& operator=(const CalibrationRig&) = delete;
   ~CalibrationRig() {
     runner_.reset();
     loop_.reset();
@@ -175,7 +177,7 @@ class CalibrationRig {
     const double end_s = t_s_ + max_s;
     for (;;) {
       run(100);
-      const std::string status = runner_->status().status;
+      std::string status = runner_->status().status;
       if (status != "running") return status;
       if (t_s_ > end_s) return "timeout";
     }
