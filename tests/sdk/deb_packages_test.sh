@@ -123,7 +123,7 @@ expect_calls() {
   got=$(calls "$@")
   [[ $got == "$want" ]] || fail "$*: ran '$got', expected '$want'"
 }
-sysusers='systemd-sysusers swivel.conf;udevadm trigger --subsystem-match=misc --sysname-match=cpu_dma_latency;'
+sysusers='systemd-sysusers swivel.conf;udevadm trigger --subsystem-match=misc --sysname-match=cpu_dma_latency;deb-systemd-helper update-state swiveld.service;'
 if [[ ! -d /run/systemd/system ]]; then
   expect_calls "$sysusers" no postinst configure
   expect_calls "$sysusers" no postinst configure 0.0.9
