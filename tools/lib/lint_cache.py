@@ -1,0 +1,192 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The record of what clang-tidy found in each source, keyed by everything that decides it.
+
+A source's key is a SHA-256 over the clang-tidy version, every .clang-tidy of the
+repository, the source's compile command (with the checkout's and the build tree's paths
+replaced, so that another clone gets the same key), and the path and content of every
+project file the source includes, directly or not (generated headers of the build tree
+too). Edit any of them and the key changes, so the source is linted again. The record has a
+line "PATH KEY RESULT" per source, RESULT one of
+  clean       this exact input was linted clean
+  findings    this exact input had findings when the record began: known, listed by every
+              lint run, to be fixed
+  unlinted    this exact input was not linted when the record began: listed by every lint
+              run until a clean result replaces it
+A result holds only for its key: a source whose key changed is linted, whatever it was.
+Lint runs record only clean results, so the known ones can only go: a source edited (or
+one of its headers) must be clean.
+
+    lint_cache.py stale REPO BUILD LINT_DB RECORD VERSION
+        prints the compiled sources whose key has no result in RECORD
+    lint_cache.py known REPO BUILD LINT_DB RECORD VERSION
+        prints "PATH RESULT" for the sources whose key has a result other than clean
+    lint_cache.py unlinted REPO BUILD LINT_DB RECORD VERSION
+        records every compiled source whose key has no result as unlinted (how the record
+        began: the sources a first full run had not reached)
+    lint_cache.py keys REPO BUILD LINT_DB VERSION PATH...
+        prints "PATH KEY" for each source
+    lint_cache.py record REPO BUILD LINT_DB RECORD VERSION KEYS RESULTS
+        RESULTS has a line "PATH clean", "PATH findings" or "PATH failed" for each source
+        linted: records each clean one whose key is still the one in the KEYS file (written
+        by `keys` before linting, so a file edited while it was linted is not recorded);
+        drops a clean result the source no longer has, and the lines of sources no longer
+        tracked
+"""
+
+import fcntl
+import hashlib
+import os
+import shlex
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import compile_db  # noqa: E402
+import include_graph  # noqa: E402
+
+RECORD_HEADER = (
+    "# What clang-tidy found in each source: path, the key of everything that decides it, and\n"
+    "# the result (tools/lib/lint_cache.py). Written by tools/lint; commit it with the sources.\n"
+)
+RESULTS = ("clean", "findings", "unlinted")
+
+
+class Keys:
+    def __init__(self, repo, build, lint_db, version, tracked=None):
+        self.repo = os.path.realpath(repo)
+        self.build = os.path.realpath(build)
+        if tracked is None:
+            tracked = subprocess.run(["git", "ls-files"], cwd=self.repo, check=True,
+                                     capture_output=True, text=True).stdout.split("\n")
+        self.tracked = set(tracked)
+        self.sources = compile_db.by_source(compile_db.load(lint_db),
+                                            self.repo, self.tracked)
+        digest = hashlib.sha256(version.encode())
+        for config in sorted(p for p in self.tracked if os.path.basename(p) == ".clang-tidy"):
+            digest.update(config.encode() + b"\0" + self._read(os.path.join(self.repo, config)))
+        self.common = digest.hexdigest()
+        self.content = {}
+
+    def _portable(self, text):
+        # The build tree first: it may lie inside the checkout.
+        return text.replace(self.build, "<build>").replace(self.repo, "<repo>")
+
+    def _read(self, path):
+        with open(path, "rb") as f:
+            return f.read()
+
+    def _content_hash(self, path):
+        if path not in self.content:
+            data = self._read(path)
+            if path.startswith(os.path.join(self.build, "")):
+                # Generated files name the folders they were generated in.
+                data = self._portable(data.decode("utf-8", "replace")).encode()
+            self.content[path] = hashlib.sha256(data).hexdigest()
+        return self.content[path]
+
+    def key(self, source):
+        entry = self.sources.get(source)
+        if entry is None:
+            return None
+        words = shlex.split(entry["command"])
+        if "-o" in words:
+            i = words.index("-o")
+            del words[i:i + 2]
+        digest = hashlib.sha256(self.common.encode())
+        digest.update(self._portable(" ".join(words)).encode())
+        resolver = include_graph.Resolver(
+            include_graph.include_dirs(entry["command"], entry["directory"]),
+            [self.repo, self.build])
+        _, files = include_graph.unit_edges(os.path.join(self.repo, source), resolver)
+        for path in sorted(files):
+            digest.update(b"\0" + self._portable(path).encode() + b" " +
+                          self._content_hash(path).encode())
+        return digest.hexdigest()
+
+
+def read_record(path):
+    """{source: (key, result)}."""
+    record = {}
+    if os.path.exists(path):
+        with open(path, encoding="utf-8") as f:
+            for number, line in enumerate(f, 1):
+                if not line.strip() or line.startswith("#"):
+                    continue
+                fields = line.split()
+                if len(fields) != 3 or fields[2] not in RESULTS:
+                    sys.exit(f"{path}:{number}: expected PATH KEY RESULT, RESULT one of "
+                             f"{', '.join(RESULTS)}; got: {line.strip()}")
+                record[fields[0]] = (fields[1], fields[2])
+    return record
+
+
+def write_record(path, record):
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(RECORD_HEADER)
+        for source in sorted(record):
+            key, result = record[source]
+            f.write(f"{source} {key} {result}\n")
+    os.replace(tmp, path)
+
+
+def main(argv):
+    if len(argv) < 2:
+        sys.exit(__doc__)
+    command = argv[1]
+    if command == "stale" and len(argv) == 7:
+        repo, build, lint_db, record_path, version = argv[2:]
+        keys = Keys(repo, build, lint_db, version)
+        record = read_record(os.path.join(repo, record_path))
+        for source in sorted(keys.sources):
+            if record.get(source, (None,))[0] != keys.key(source):
+                print(source)
+    elif command == "known" and len(argv) == 7:
+        repo, build, lint_db, record_path, version = argv[2:]
+        keys = Keys(repo, build, lint_db, version)
+        record = read_record(os.path.join(repo, record_path))
+        for source in sorted(keys.sources):
+            key, result = record.get(source, (None, None))
+            if key == keys.key(source) and result != "clean":
+                print(source, result)
+    elif command == "unlinted" and len(argv) == 7:
+        repo, build, lint_db, record_path, version = argv[2:]
+        keys = Keys(repo, build, lint_db, version)
+        record_path = os.path.join(repo, record_path)
+        record = read_record(record_path)
+        for source in keys.sources:
+            key = keys.key(source)
+            if record.get(source, (None,))[0] != key:
+                record[source] = (key, "unlinted")
+        write_record(record_path, record)
+    elif command == "keys" and len(argv) >= 6:
+        repo, build, lint_db, version = argv[2:6]
+        keys = Keys(repo, build, lint_db, version)
+        for source in argv[6:]:
+            print(source, keys.key(source) or "-")
+    elif command == "record" and len(argv) == 9:
+        repo, build, lint_db, record_path, version, keys_file, results_file = argv[2:9]
+        keys = Keys(repo, build, lint_db, version)
+        with open(keys_file, encoding="utf-8") as f:
+            before = dict(line.split() for line in f if line.strip())
+        with open(results_file, encoding="utf-8") as f:
+            results = dict(line.split() for line in f if line.strip())
+        record_path = os.path.join(repo, record_path)
+        # Two lint runs at once each add their own sources.
+        with open(os.path.join(os.path.dirname(lint_db), "record.lock"), "w",
+                  encoding="utf-8") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            record = {s: k for s, k in read_record(record_path).items() if s in keys.tracked}
+            for source, result in results.items():
+                key = keys.key(source)
+                if result == "clean" and key is not None and before.get(source) == key:
+                    record[source] = (key, result)
+                elif record.get(source, (None, None))[1] == "clean":
+                    record.pop(source)
+            write_record(record_path, record)
+    else:
+        sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
