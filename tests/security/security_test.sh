@@ -170,7 +170,7 @@ access() {
 # The topic names the daemon's code can create, read from the code itself: the bridge's
 # constants (topics.hpp), the ROS 2 names of options.cpp (relative ones both without and with
 # a namespace, absolute ones as they are), the sensors' default topics, and every sensor topic
-# a shipped configuration or the README names (motion capture has no default).
+# a shipped configuration or the documentation names (motion capture has no default).
 code_topics() {
   local header="$source_dir/core/include/swivel/dds/topics.hpp"
   local options="$source_dir/core/dds/src/options.cpp" name
@@ -178,9 +178,9 @@ code_topics() {
   {
     sed -n 's/.*ros2_topic(ros_namespace, "\([a-z_/]*\)").*/\1/p' "$options"
     sed -n 's/.*parse_sensor_topic([a-z]*, ros_namespace, "\([a-z_/]*\)".*/\1/p' "$options"
-    # topic: values in the shipped configurations (commented examples too) and the README.
+    # topic: values in the shipped configurations (commented examples too) and the docs.
     sed -n 's/^[ #]*topic: *\([A-Za-z_/][A-Za-z0-9_/]*\).*/\1/p' "$source_dir"/config/*.yaml
-    grep -ho 'topic: /[A-Za-z0-9_/]*' "$source_dir/README.md" | sed 's/^topic: //'
+    grep -ho 'topic: /[A-Za-z0-9_/]*' "$source_dir/README.md" "$source_dir"/docs/*.md | sed 's/^topic: //'
   } | sort -u | while read -r name; do
     if [[ $name == /* ]]; then
       echo "rt${name}"
