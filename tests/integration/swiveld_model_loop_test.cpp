@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The model-gap loop closed on the robot (README "The loop on a live robot"): swiveld drives
+// The model-gap loop closed on the robot (docs/lab.md "The loop on a live robot"): swiveld drives
 // the simulated docent, whose true model hides a gyro bias and a wheel-radius asymmetry; it is
 // recorded with `swivelctl record`, `swivel-lab gap` names what its model misses and writes
 // model_augmented.yaml with it folded into the robot's own parameters, that model replaces the

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// A new robot model applied to a running swiveld by a reload (README "The loop on a live
-// robot"): the drivetrain and the localization are rebuilt for it and taken by the loop
+// A new robot model applied to a running swiveld by a reload (docs/lab.md "The loop on a
+// live robot"): the drivetrain and the localization are rebuilt for it and taken by the loop
 // with the robot at rest; a reload while it moves is refused with the rule; a model the
 // running robot cannot take is rejected and the daemon keeps its model. Real processes over
 // loopback DDS, domains 91 and 92.
@@ -158,7 +158,7 @@ TEST(SwiveldModelReload, AnEditedModelAppliesAtRestAndTheOdometryUsesIt) {
   // integrates them as 0.09 m: the estimate now runs ahead of the truth by the ratio.
   EXPECT_NEAR(robot.estimate_over_truth(2.0), kEditedRadiusM / kTrueRadiusM, 0.03);
 
-  // The README's loop: robot_model pointed at another file; the watcher reloads the edited
+  // The loop of docs/lab.md: robot_model pointed at another file; the watcher reloads the edited
   // configuration and the diagnostics name the model in effect.
   const std::string augmented = dir + "/it_model.augmented.yaml";
   std::ofstream(augmented) << original;

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The files a run writes, read back with the project's own readers: proof of the format of
-// swivel/run_log.hpp and README "Configuration reference: robot model". Also determinism.
+// swivel/run_log.hpp and docs/configuration.md "Robot model". Also determinism.
 
 #include <gtest/gtest.h>
 
