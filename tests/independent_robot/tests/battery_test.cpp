@@ -73,8 +73,10 @@ TEST(Battery, HasAtLeastFortyCasesWithUniqueIdsThatFindCaseReturns) {
 TEST(Battery, EveryLibraryEffectAppearsAloneAtTwoSizesOnEachRobot) {
   for (const auto& [robot, effects] : library_effects_by_robot()) {
     for (const std::string& effect : effects) {
-      const BatteryCase* small = find_case(robot + "/" + effect + "/small");
-      const BatteryCase* large = find_case(robot + "/" + effect + "/large");
+      std::string prefix = robot;
+      prefix.append("/").append(effect);
+      const BatteryCase* small = find_case(prefix + "/small");
+      const BatteryCase* large = find_case(prefix + "/large");
       ASSERT_NE(small, nullptr) << robot << " " << effect;
       ASSERT_NE(large, nullptr) << robot << " " << effect;
       for (const BatteryCase* c : {small, large}) {
@@ -178,6 +180,7 @@ TEST(Battery, CleanRunsOfARobotDriveDifferentTours) {
 TEST(Battery, SubsetIsTheEightRepresentativeCases) {
   const std::vector<BatteryCase> subset = battery_subset();
   std::vector<std::string> ids;
+  ids.reserve(subset.size());
   for (const BatteryCase& c : subset) ids.push_back(c.id);
   EXPECT_EQ(ids, (std::vector<std::string>{"docent/clean/1", "swpc4/clean/1",
                                            "docent/gyro_bias/large", "swpc4/steering_offset/large",

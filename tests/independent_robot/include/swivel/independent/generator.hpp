@@ -10,7 +10,7 @@ namespace swivel::independent {
 
 struct GeneratedRun {
   std::string run_csv;             ///< swivel/run_log.hpp
-  std::string nominal_model_yaml;  ///< README "Configuration reference: robot model"
+  std::string nominal_model_yaml;  ///< docs/configuration.md "Robot model"
 };
 
 /// Simulates `spec` and writes both files. Deterministic: the same spec gives byte-identical

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The two files a run hands to its users: the run log (swivel/run_log.hpp) and the
-// nominal robot model (README "Configuration reference: robot model"), written here as text.
+// nominal robot model (docs/configuration.md "Robot model"), written here as text.
 
 #include <string>
 
