@@ -95,9 +95,10 @@ class KeyTest(MadeUpTree):
 
     def test_record_round_trip_and_bad_line(self):
         path = os.path.join(self.repo, "record.txt")
-        lint_cache.write_record(path, {"a.cpp": ("k1", "clean"), "b.cpp": ("k2", "findings")})
-        self.assertEqual(lint_cache.read_record(path),
-                         {"a.cpp": ("k1", "clean"), "b.cpp": ("k2", "findings")})
+        record = {"a.cpp": {"k1": "clean", "k0": "unlinted"}, "b.cpp": {"k2": "findings"}}
+        lint_cache.write_record(path, record)
+        self.assertEqual(lint_cache.read_record(path), record)
+        self.assertEqual(list(lint_cache.read_record(path)["a.cpp"]), ["k1", "k0"])
         write(self.repo, "record.txt", "a.cpp k1 fine\n")
         with self.assertRaises(SystemExit) as raised:
             lint_cache.read_record(path)
@@ -115,21 +116,26 @@ class RecordTest(MadeUpTree):
         return lint_cache.read_record(os.path.join(self.repo, "record.txt"))
 
     def test_only_a_clean_result_is_recorded(self):
-        self.assertEqual(self.record("clean"),
-                         {"plugins/k/n/src/p.cpp": (self.key(), "clean")})
+        self.assertEqual(self.record("clean"), {"plugins/k/n/src/p.cpp": {self.key(): "clean"}})
         self.assertEqual(self.record("findings"), {})
         self.assertEqual(self.record("failed"), {})
+
+    def test_a_source_keeps_its_last_keys(self):
+        lint_cache.write_record(os.path.join(self.repo, "record.txt"), {
+            "plugins/k/n/src/p.cpp": {f"old{i}": "clean" for i in range(5)}})
+        entries = self.record("clean")["plugins/k/n/src/p.cpp"]
+        self.assertEqual(list(entries), ["old2", "old3", "old4", self.key()])
 
     def test_a_source_edited_while_it_was_linted_is_not_recorded(self):
         self.assertEqual(self.record("clean", before_key="0" * 64), {})
 
     def test_a_known_result_stays_until_the_source_is_clean(self):
         lint_cache.write_record(os.path.join(self.repo, "record.txt"),
-                                {"plugins/k/n/src/p.cpp": (self.key(), "findings")})
+                                {"plugins/k/n/src/p.cpp": {self.key(): "findings"}})
         self.assertEqual(self.record("findings"),
-                         {"plugins/k/n/src/p.cpp": (self.key(), "findings")})
+                         {"plugins/k/n/src/p.cpp": {self.key(): "findings"}})
         self.assertEqual(self.record("clean"),
-                         {"plugins/k/n/src/p.cpp": (self.key(), "clean")})
+                         {"plugins/k/n/src/p.cpp": {self.key(): "clean"}})
 
 
 class LayersTest(unittest.TestCase):

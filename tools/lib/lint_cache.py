@@ -6,7 +6,8 @@ repository, the source's compile command (with the checkout's and the build tree
 replaced, so that another clone gets the same key), and the path and content of every
 project file the source includes, directly or not (generated headers of the build tree
 too). Edit any of them and the key changes, so the source is linted again. The record has a
-line "PATH KEY RESULT" per source, RESULT one of
+line "PATH KEY RESULT" per source and key (the last few keys of a source are kept, so that
+the record holds the committed content and another one being worked on), RESULT one of
   clean       this exact input was linted clean
   findings    this exact input had findings when the record began: known, listed by every
               lint run, to be fixed
@@ -49,6 +50,7 @@ RECORD_HEADER = (
     "# the result (tools/lib/lint_cache.py). Written by tools/lint; commit it with the sources.\n"
 )
 RESULTS = ("clean", "findings", "unlinted")
+KEYS_KEPT = 4  # per source
 
 
 class Keys:
@@ -105,7 +107,7 @@ class Keys:
 
 
 def read_record(path):
-    """{source: (key, result)}."""
+    """{source: {key: result}}, each source's keys oldest first."""
     record = {}
     if os.path.exists(path):
         with open(path, encoding="utf-8") as f:
@@ -116,8 +118,12 @@ def read_record(path):
                 if len(fields) != 3 or fields[2] not in RESULTS:
                     sys.exit(f"{path}:{number}: expected PATH KEY RESULT, RESULT one of "
                              f"{', '.join(RESULTS)}; got: {line.strip()}")
-                record[fields[0]] = (fields[1], fields[2])
+                record.setdefault(fields[0], {})[fields[1]] = fields[2]
     return record
+
+
+def result_of(record, source, key):
+    return record.get(source, {}).get(key)
 
 
 def write_record(path, record):
@@ -125,8 +131,8 @@ def write_record(path, record):
     with open(tmp, "w", encoding="utf-8") as f:
         f.write(RECORD_HEADER)
         for source in sorted(record):
-            key, result = record[source]
-            f.write(f"{source} {key} {result}\n")
+            for key, result in record[source].items():
+                f.write(f"{source} {key} {result}\n")
     os.replace(tmp, path)
 
 
@@ -139,15 +145,15 @@ def main(argv):
         keys = Keys(repo, build, lint_db, version)
         record = read_record(os.path.join(repo, record_path))
         for source in sorted(keys.sources):
-            if record.get(source, (None,))[0] != keys.key(source):
+            if result_of(record, source, keys.key(source)) is None:
                 print(source)
     elif command == "known" and len(argv) == 7:
         repo, build, lint_db, record_path, version = argv[2:]
         keys = Keys(repo, build, lint_db, version)
         record = read_record(os.path.join(repo, record_path))
         for source in sorted(keys.sources):
-            key, result = record.get(source, (None, None))
-            if key == keys.key(source) and result != "clean":
+            result = result_of(record, source, keys.key(source))
+            if result not in (None, "clean"):
                 print(source, result)
     elif command == "unlinted" and len(argv) == 7:
         repo, build, lint_db, record_path, version = argv[2:]
@@ -156,8 +162,8 @@ def main(argv):
         record = read_record(record_path)
         for source in keys.sources:
             key = keys.key(source)
-            if record.get(source, (None,))[0] != key:
-                record[source] = (key, "unlinted")
+            if result_of(record, source, key) is None:
+                record.setdefault(source, {})[key] = "unlinted"
         write_record(record_path, record)
     elif command == "keys" and len(argv) >= 6:
         repo, build, lint_db, version = argv[2:6]
@@ -179,10 +185,16 @@ def main(argv):
             record = {s: k for s, k in read_record(record_path).items() if s in keys.tracked}
             for source, result in results.items():
                 key = keys.key(source)
+                entries = record.setdefault(source, {})
                 if result == "clean" and key is not None and before.get(source) == key:
-                    record[source] = (key, result)
-                elif record.get(source, (None, None))[1] == "clean":
-                    record.pop(source)
+                    entries.pop(key, None)
+                    entries[key] = result  # the newest last
+                    for old in list(entries)[:-KEYS_KEPT]:
+                        del entries[old]
+                elif entries.get(key) == "clean":
+                    del entries[key]
+                if not entries:
+                    del record[source]
             write_record(record_path, record)
     else:
         sys.exit(__doc__)
