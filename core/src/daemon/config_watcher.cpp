@@ -21,11 +21,12 @@ constexpr int kIdlePollMs = 100;
 
 ConfigWatcher::ConfigWatcher(const std::string& file, std::function<void()> on_change,
                              std::chrono::milliseconds debounce)
-    : on_change_(std::move(on_change)), debounce_(debounce) {
+    : on_change_(std::move(on_change)),
+      debounce_(debounce),
+      fd_(inotify_init1(IN_NONBLOCK | IN_CLOEXEC)) {
   const auto slash = file.rfind('/');
   directory_ = slash == std::string::npos ? "." : (slash == 0 ? "/" : file.substr(0, slash));
   name_ = slash == std::string::npos ? file : file.substr(slash + 1);
-  fd_ = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
   if (fd_ < 0) throw std::system_error(errno, std::generic_category(), "inotify_init1");
   if (inotify_add_watch(fd_, directory_.c_str(), IN_CLOSE_WRITE | IN_MOVED_TO | IN_CREATE) < 0) {
     const int error = errno;

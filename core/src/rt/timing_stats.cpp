@@ -19,8 +19,8 @@ void bump(std::atomic<std::uint64_t>& counter) noexcept {
 // (2^e <= us < 2^(e+1), e >= 11) falls in sub-bucket (us >> (e - 6)) - 64 of doubling e - 11.
 constexpr unsigned kLinearBits = 11;  // 2^11 = kLinearBuckets
 constexpr unsigned kSubBits = 6;      // 2^6 = kSubBuckets
-static_assert(LatencyHistogram::kLinearBuckets == 1u << kLinearBits);
-static_assert(LatencyHistogram::kSubBuckets == 1u << kSubBits);
+static_assert(LatencyHistogram::kLinearBuckets == 1U << kLinearBits);
+static_assert(LatencyHistogram::kSubBuckets == 1U << kSubBits);
 
 std::size_t LatencyHistogram::bucket_of(std::uint64_t us) noexcept {
   if (us < kLinearBuckets) return static_cast<std::size_t>(us);

@@ -14,7 +14,7 @@ namespace {
 using swivel::calibration::CalibrationInput;
 using swivel::calibration::CalibrationMotionOptions;
 
-void BM_CalibrateRobot(benchmark::State& state) {
+void calibrate_robot(benchmark::State& state) {
   const auto truth = swivel::calibration::paper_design_modules();
   CalibrationMotionOptions opt;
   opt.position_noise_m = 1e-4;
@@ -26,7 +26,7 @@ void BM_CalibrateRobot(benchmark::State& state) {
     state.SkipWithError(error.c_str());
     return;
   }
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     auto res = swivel::calibration::calibrate(input);
     benchmark::DoNotOptimize(res);
   }
@@ -37,17 +37,17 @@ void BM_CalibrateRobot(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations() * truth.size()),
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_CalibrateRobot)->Unit(benchmark::kMicrosecond);
+BENCHMARK(calibrate_robot)->Unit(benchmark::kMicrosecond);
 
-void BM_MonteCarloTrial(benchmark::State& state) {
+void monte_carlo_trial(benchmark::State& state) {
   swivel::calibration::MonteCarloOptions opt;
   opt.trials = 100;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     auto res = swivel::calibration::run_monte_carlo(opt);
     benchmark::DoNotOptimize(res);
   }
   state.SetItemsProcessed(state.iterations() * 100);
 }
-BENCHMARK(BM_MonteCarloTrial)->Unit(benchmark::kMillisecond);
+BENCHMARK(monte_carlo_trial)->Unit(benchmark::kMillisecond);
 
 }  // namespace

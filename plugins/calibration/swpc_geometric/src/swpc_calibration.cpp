@@ -22,7 +22,7 @@ template <typename... Args>
 std::string format(const char* fmt, Args... args) {
   std::array<char, 256> buf{};
   std::snprintf(buf.data(), buf.size(), fmt, args...);
-  return std::string(buf.data());
+  return {buf.data()};
 }
 
 // Collects the checks and remembers, per check name, every failure detail.

@@ -110,6 +110,8 @@ TEST(SteeringAxisFromPivots, RunOrderDoesNotMatter) {
   const double p2x = 0.3 - 0.02 * std::cos(phi2m);
   const double p2y = 0.1 - 0.02 * std::sin(phi2m);
   const AxisGeometry fwd = steering_axis_from_pivots(p1x, p1y, p2x, p2y, phi1m, phi2m);
+  // The runs in the other order, on purpose.
+  // NOLINTNEXTLINE(readability-suspicious-call-argument)
   const AxisGeometry rev = steering_axis_from_pivots(p2x, p2y, p1x, p1y, phi2m, phi1m);
   EXPECT_NEAR(fwd.x_m, rev.x_m, 1e-15);
   EXPECT_NEAR(fwd.y_m, rev.y_m, 1e-15);

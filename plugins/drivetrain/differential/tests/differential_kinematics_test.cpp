@@ -10,8 +10,8 @@ namespace swivel::differential {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-const DifferentialParams kDocent{0.075, 0.075, 0.40};
-const DifferentialParams kUneven{0.070, 0.080, 0.40};
+constexpr DifferentialParams kDocent{0.075, 0.075, 0.40};
+constexpr DifferentialParams kUneven{0.070, 0.080, 0.40};
 
 TEST(DifferentialKinematics, StraightLineDrivesBothWheelsAlike) {
   const WheelRates rates = inverse(kDocent, 0.3, 0.0);
@@ -56,7 +56,9 @@ TEST(DifferentialKinematics, IncrementsComposeToTheSameArc) {
   const double dpsi_left = 3.0;
   const double dpsi_right = 5.0;
   const Pose2 whole = forward_increment(kDocent, dpsi_left, dpsi_right);
-  double x = 0.0, y = 0.0, yaw = 0.0;
+  double x = 0.0;
+  double y = 0.0;
+  double yaw = 0.0;
   const int steps = 1000;
   for (int i = 0; i < steps; ++i) {
     const Pose2 d = forward_increment(kDocent, dpsi_left / steps, dpsi_right / steps);

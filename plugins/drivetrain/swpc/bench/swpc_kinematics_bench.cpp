@@ -43,7 +43,7 @@ void bm_inverse(benchmark::State& state) {
   const std::span<const SwpcModuleParams> modules(f.modules.data(), f.n);
   Twist2 t{0.3, -0.1, 0.5};
   std::array<swivel::swpc::ModuleRates, swivel::kMaxModules> rates{};
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     benchmark::DoNotOptimize(t);
     for (std::size_t i = 0; i < f.n; ++i) {
       rates[i] = swivel::swpc::inverse_module(f.modules[i], f.phi[i], t);
@@ -64,7 +64,7 @@ void bm_inverse(benchmark::State& state) {
 void bm_forward(benchmark::State& state) {
   Fixture f(static_cast<std::size_t>(state.range(0)));
   const std::span<const SwpcModuleParams> modules(f.modules.data(), f.n);
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     benchmark::DoNotOptimize(f.wheel_rate.data());
     auto fit = swivel::swpc::forward(modules, std::span<const double>(f.phi.data(), f.n),
                                      std::span<const double>(f.steer_rate.data(), f.n),

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 #include <span>
+#include <utility>
 
 #include "swivel/differential/differential_kinematics.hpp"
 #include "swivel/robot_model.hpp"
@@ -46,7 +47,7 @@ inline Pose2 compose(const Pose2& a, const Pose2& b) {
 /// Encoder dead reckoning with the nominal model (yaw unwrapped).
 class Odometry {
  public:
-  Odometry(const RobotModel& nominal, const Pose2& start) : model_(nominal), pose_(start) {}
+  Odometry(RobotModel nominal, const Pose2& start) : model_(std::move(nominal)), pose_(start) {}
 
   void update(const HardwareState& prev, const HardwareState& cur) {
     const double dt = cur.stamp_s - prev.stamp_s;

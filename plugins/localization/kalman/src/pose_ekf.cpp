@@ -153,8 +153,8 @@ EkfResult PoseEkf::finish_covariance() noexcept {
 Pose2 PoseEkf::pose() const noexcept { return Pose2{x_(0), x_(1), x_(2)}; }
 
 void PoseEkf::pose_covariance(std::array<double, 9>& out) const noexcept {
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(3 * r + c)] = p_(r, c);
+  for (Eigen::Index r = 0; r < 3; ++r) {
+    for (Eigen::Index c = 0; c < 3; ++c) out[static_cast<std::size_t>(3 * r + c)] = p_(r, c);
   }
 }
 

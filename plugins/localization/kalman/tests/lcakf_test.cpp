@@ -15,12 +15,15 @@ TEST(Lcakf, SmoothsWhiteMeasurementNoiseOnConstantVelocity) {
   kf.reset(0.0, 3.0, 0.0);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0.0, 0.02);
-  const double dt = 0.01, vx = 0.3;
-  double raw_sq = 0.0, filtered_sq = 0.0;
+  const double dt = 0.01;
+  const double vx = 0.3;
+  double raw_sq = 0.0;
+  double filtered_sq = 0.0;
   int n = 0;
   for (int i = 1; i <= 3000; ++i) {
     const double tx = vx * i * dt;
-    const double zx = tx + noise(rng), zy = 3.0 + noise(rng);
+    const double zx = tx + noise(rng);
+    const double zy = 3.0 + noise(rng);
     ASSERT_TRUE(kf.step(dt, zx, zy));
     if (i > 500) {
       raw_sq += (zx - tx) * (zx - tx);
@@ -28,7 +31,8 @@ TEST(Lcakf, SmoothsWhiteMeasurementNoiseOnConstantVelocity) {
       ++n;
     }
   }
-  const double raw_rms = std::sqrt(raw_sq / n), filtered_rms = std::sqrt(filtered_sq / n);
+  const double raw_rms = std::sqrt(raw_sq / n);
+  const double filtered_rms = std::sqrt(filtered_sq / n);
   EXPECT_NEAR(raw_rms, 0.02, 0.002);
   EXPECT_LT(filtered_rms, 0.5 * raw_rms);
   EXPECT_NEAR(kf.vx_mps(), vx, 0.02);

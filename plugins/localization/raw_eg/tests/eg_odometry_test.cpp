@@ -28,7 +28,8 @@ void expect_on_circle(const EgOdometry& eg, double v, double w, double t, double
 
 TEST(EgOdometry, EncoderHeadingFollowsExactCircle) {
   EgOdometry eg(EgConfig{HeadingSource::kEncoders, 1.0, 0.0});
-  const double v = 0.3, w = 0.5;
+  const double v = 0.3;
+  const double w = 0.5;
   const int steps = 20000;  // 20 s: more than a full turn
   for (int i = 0; i < steps; ++i) ASSERT_TRUE(eg.step(arc_increment(v, w, kDt), kDt, 0.0, false));
   expect_on_circle(eg, v, w, steps * kDt, 1e-9);
@@ -37,7 +38,8 @@ TEST(EgOdometry, EncoderHeadingFollowsExactCircle) {
 
 TEST(EgOdometry, GyroHeadingFollowsExactCircle) {
   EgOdometry eg(EgConfig{HeadingSource::kGyro, 1.0, 0.0});
-  const double v = 0.3, w = -0.8;
+  const double v = 0.3;
+  const double w = -0.8;
   const int steps = 20000;
   for (int i = 0; i < steps; ++i) ASSERT_TRUE(eg.step(arc_increment(v, w, kDt), kDt, w, true));
   EXPECT_TRUE(eg.last_step_used_gyro());
@@ -48,7 +50,8 @@ TEST(EgOdometry, GyroBiasDriftsHeadingByBiasTimesTime) {
   // Straight odometry, gyro reading only its bias: the heading drifts by bias * t and the
   // position bends onto the circle of radius v / bias.
   EgOdometry eg(EgConfig{HeadingSource::kGyro, 1.0, 0.0});
-  const double v = 0.3, bias = 0.01;
+  const double v = 0.3;
+  const double bias = 0.01;
   const int steps = 30000;
   for (int i = 0; i < steps; ++i) ASSERT_TRUE(eg.step(arc_increment(v, 0.0, kDt), kDt, bias, true));
   const double t = steps * kDt;
