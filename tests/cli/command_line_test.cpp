@@ -31,6 +31,7 @@ Parsed parse_args(std::vector<std::string> args) {
   sub->callback([] { throw CLI::RuntimeError(7); });
   args.insert(args.begin(), "prog");
   std::vector<const char*> argv;
+  argv.reserve(args.size());
   for (const auto& a : args) argv.push_back(a.c_str());
   Parsed parsed;
   testing::internal::CaptureStdout();

@@ -35,7 +35,7 @@ ToolRun run(const std::string& exe, const std::vector<std::string>& args) {
 
 TEST(Executables, AllAreTested) {
   // swiveld, swivelctl, swivel-lab, swivel-bench and the other benchmarks at least.
-  EXPECT_GE(executables().size(), 4u) << SWIVEL_EXECUTABLES;
+  EXPECT_GE(executables().size(), 4U) << SWIVEL_EXECUTABLES;
 }
 
 TEST(Executables, VersionPrintsTheProjectVersion) {
@@ -44,7 +44,7 @@ TEST(Executables, VersionPrintsTheProjectVersion) {
     const ToolRun r = run(exe, {"--version"});
     EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
     EXPECT_EQ(r.out, version_line(name) + "\n") << name;
-    EXPECT_EQ(r.out.rfind(name + " " + SWIVEL_EXPECTED_VERSION, 0), 0u) << r.out;
+    EXPECT_EQ(r.out.rfind(name + " " + SWIVEL_EXPECTED_VERSION, 0), 0U) << r.out;
   }
 }
 

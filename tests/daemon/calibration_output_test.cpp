@@ -72,7 +72,7 @@ TEST_F(CalibrationOutput, ServiceWritesToItsStateDirectory) {
 
   ASSERT_FALSE(saved.path.empty()) << saved.error;
   EXPECT_EQ(fs::path(saved.path).parent_path(), fs::path(state));
-  EXPECT_EQ(fs::path(saved.path).filename().string().rfind("swpc4.calibrated-", 0), 0u);
+  EXPECT_EQ(fs::path(saved.path).filename().string().rfind("swpc4.calibrated-", 0), 0U);
   const RobotModel back = load_robot_model(saved.path);
   EXPECT_EQ(back.modules.size(), model_.modules.size());
   EXPECT_EQ(back.source_file, saved.path);

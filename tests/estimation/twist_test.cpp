@@ -51,7 +51,9 @@ struct ConstantSpeed {
 ConstantSpeed constant_speed(const RigOptions& options, double vx, double vy, double wz) {
   FaultRig rig(options);
   rig.drive(vx, vy, wz, 1500);
-  std::vector<double> vxs, vys, wzs;
+  std::vector<double> vxs;
+  std::vector<double> vys;
+  std::vector<double> wzs;
   double sigma_vx = 0.0;
   double sigma_wz = 0.0;
   for (int i = 0; i < 2000; ++i) {
@@ -151,7 +153,8 @@ Line fit_line(const std::vector<double>& t, const std::vector<double>& v, std::s
   const auto n = static_cast<double>(t.size() - first);
   line.t0 = std::accumulate(t.begin() + static_cast<long>(first), t.end(), 0.0) / n;
   line.v0 = std::accumulate(v.begin() + static_cast<long>(first), v.end(), 0.0) / n;
-  double stt = 0.0, stv = 0.0;
+  double stt = 0.0;
+  double stv = 0.0;
   for (std::size_t k = first; k < t.size(); ++k) {
     stt += (t[k] - line.t0) * (t[k] - line.t0);
     stv += (t[k] - line.t0) * (v[k] - line.v0);
@@ -181,7 +184,11 @@ RampDelays ramp_delays(double twist_window_s) {
   FaultRig rig(o);
   rig.drive(0.0, 0.0, 0.0, 200);
   StateSnapshot last = rig.state();
-  std::vector<double> t_true, v_true, t, v_window, v_cycle;
+  std::vector<double> t_true;
+  std::vector<double> v_true;
+  std::vector<double> t;
+  std::vector<double> v_window;
+  std::vector<double> v_cycle;
   const double r_m = rig.robot.differential.wheel_radius_left_m;
   for (int i = 0; i < 550; ++i) {  // 0.55 s of a 0.6 s ramp to 0.3 m/s
     rig.drive(0.3, 0.0, 0.0, 1);

@@ -82,9 +82,9 @@ class FaultRig {
 
   explicit FaultRig(const RigOptions& options = {})
       : loader(plugin_search_path()),
+        robot(load_robot_model(source_dir() + "/config/robots/" + options.robot + ".yaml")),
+        world(robot),
         log_sink_(std::make_shared<spdlog::sinks::ostream_sink_st>(log_text_)) {
-    robot = load_robot_model(source_dir() + "/config/robots/" + options.robot + ".yaml");
-    world = robot;
     world.effects = options.world_effects;
     hardware = loader.create<Hardware>("sim");
     hardware->configure(plugin_context(options.hardware_params, "hardware.params", world));
@@ -112,6 +112,8 @@ class FaultRig {
     spdlog::set_default_logger(std::make_shared<spdlog::logger>("faults", log_sink_));
   }
 
+  FaultRig(const FaultRig&) = delete;
+  FaultRig& operator=(const FaultRig&) = delete;
   ~FaultRig() {
     loop.reset();
     // The sink writes into this rig: leave spdlog a logger that outlives it.

@@ -76,7 +76,7 @@ std::string format_number(double value) {
   char buf[32];
   // Shortest round-trip digits, fixed notation unless the exponent is far from zero.
   const auto r = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general);
-  return std::string(buf, r.ptr);
+  return {buf, r.ptr};
 }
 
 }  // namespace swivel::independent

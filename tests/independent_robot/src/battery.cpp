@@ -218,14 +218,14 @@ const std::vector<BatteryCase>& battery() {
 }
 
 std::vector<BatteryCase> battery_subset() {
-  static const char* const kIds[] = {"docent/clean/1",
-                                     "swpc4/clean/1",
-                                     "docent/gyro_bias/large",
-                                     "swpc4/steering_offset/large",
-                                     "docent/actuator_lag/large",
-                                     "swpc4/accel_limit/large",
-                                     "docent/pair/track_width+actuator_lag",
-                                     "swpc4/outside/floor_drift"};
+  static constexpr const char* kIds[] = {"docent/clean/1",
+                                         "swpc4/clean/1",
+                                         "docent/gyro_bias/large",
+                                         "swpc4/steering_offset/large",
+                                         "docent/actuator_lag/large",
+                                         "swpc4/accel_limit/large",
+                                         "docent/pair/track_width+actuator_lag",
+                                         "swpc4/outside/floor_drift"};
   std::vector<BatteryCase> subset;
   for (const char* id : kIds) {
     const BatteryCase* c = find_case(id);

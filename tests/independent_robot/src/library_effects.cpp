@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "swivel/independent/library_effects.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -155,10 +156,9 @@ std::vector<ExpectedEffect> expected_effects(const RunSpec& spec) {
   const TrueEffects& t = s.truth;
   std::vector<ExpectedEffect> out;
   const auto differs = [&](const std::string& name, double identity) {
-    for (const ParamSlot& slot : slots) {
-      if (slot.effect == name && slot.get(s) != identity) return true;
-    }
-    return false;
+    return std::ranges::any_of(slots, [&](const ParamSlot& slot) {
+      return slot.effect == name && slot.get(s) != identity;
+    });
   };
   if (differs("gyro_bias", 0.0)) out.push_back(effect_with("gyro_bias", slots, s));
   if (differs("gyro_scale", 1.0)) out.push_back(effect_with("gyro_scale", slots, s));

@@ -26,7 +26,7 @@ class RandomStream {
 
   /// Uniform integer in [lo, hi].
   int integer(int lo, int hi) {
-    const double span = static_cast<double>(hi - lo + 1);
+    const auto span = static_cast<double>(hi - lo + 1);
     const int k = lo + static_cast<int>(std::floor(uniform() * span));
     return k > hi ? hi : k;
   }

@@ -82,6 +82,9 @@ class Simulation {
     const double period = 1.0 / (n.mocap_rate_hz * (1.0 + 1e-6 * n.mocap_clock_ppm));
     const double last = rows_.back().t_s;
     auto row = rows_.begin();
+    // The capture clock adds its period frame by frame, as a real one does; the runs this
+    // wrote are recorded, so the sum stays.
+    // NOLINTNEXTLINE(clang-analyzer-security.FloatLoopCounter,cert-flp30-c)
     for (double f = clock_.uniform(0.0, period); f <= last; f += period) {
       const bool lost = clock_.chance(n.mocap_dropout);
       row = std::lower_bound(row, rows_.end(), f,
@@ -108,7 +111,7 @@ class Simulation {
 
   // The steering angles the encoders report at control tick `tick` (delayed like every
   // encoder reading), as the controller reads them.
-  std::array<double, kMaxWheels> measured_steering_at_tick(std::size_t tick) const {
+  [[nodiscard]] std::array<double, kMaxWheels> measured_steering_at_tick(std::size_t tick) const {
     const double back = static_cast<double>(tick) - spec_.truth.sensor_delay_s / kControlPeriodS;
     std::array<double, kMaxWheels> phi = steer_by_tick_.front();
     if (back > 0.0) {
@@ -124,7 +127,7 @@ class Simulation {
     return measured_steering(phi);
   }
 
-  std::array<double, kMaxWheels> measured_steering(
+  [[nodiscard]] std::array<double, kMaxWheels> measured_steering(
       const std::array<double, kMaxWheels>& phi) const {
     std::array<double, kMaxWheels> out{};
     if (spec_.robot == Robot::kDocent) return out;

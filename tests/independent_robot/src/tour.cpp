@@ -79,6 +79,8 @@ class TourBuilder {
     return deck;
   }
 
+  // A speed change with the robot nearly at rest becomes a straight: one level deep.
+  // NOLINTNEXTLINE(misc-no-recursion)
   void perform(Move move) {
     const bool holonomic = robot_ == Robot::kSwpc4 && steering_ == Steering::kPowered;
     switch (move) {
@@ -152,7 +154,7 @@ class TourBuilder {
     }
   }
 
-  Twist translation(double direction_rad, double speed) const {
+  [[nodiscard]] static Twist translation(double direction_rad, double speed) {
     return Twist{speed * std::cos(direction_rad), speed * std::sin(direction_rad), 0.0};
   }
 
@@ -164,10 +166,10 @@ class TourBuilder {
     return rng_.chance(0.5) ? 0.0 : rng_.uniform(std::min(0.5, longest), longest);
   }
 
-  bool far() const { return std::hypot(pose_.x_m, pose_.y_m) > kHomeRadiusM; }
+  [[nodiscard]] bool far() const { return std::hypot(pose_.x_m, pose_.y_m) > kHomeRadiusM; }
 
   // Direction of the start point in the robot frame.
-  double home_bearing() const {
+  [[nodiscard]] double home_bearing() const {
     return wrap_angle(std::atan2(-pose_.y_m, -pose_.x_m) - pose_.yaw_rad);
   }
 

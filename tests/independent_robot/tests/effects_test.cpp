@@ -26,7 +26,6 @@ using test::row_at;
 using test::rows_between;
 using test::step_tour;
 using test::wheel_at;
-using test::wrapped;
 
 TEST(Effects, GyroScaleAndBiasShowInTheGyroReading) {
   RunSpec spec = quiet_run(Robot::kDocent, 8.0, step_tour(2.0, Twist{0.0, 0.0, 0.6}));

@@ -38,7 +38,7 @@ TEST(DocentMotion, StraightRunTurnsEncodersByVOverRAndLeavesTheGyroAtZero) {
     EXPECT_NEAR(r->truth.y_m, 0.0, 1e-12);
     gyro_sum += r->gyro_wz_radps;
   }
-  const double n = static_cast<double>(rows.size());
+  const auto n = static_cast<double>(rows.size());
   EXPECT_NEAR(gyro_sum / n, 0.0, 4.0 * 0.002 / std::sqrt(n));
 }
 
@@ -59,7 +59,7 @@ TEST(DocentMotion, TurnInPlaceTurnsTheWheelsOppositeByWBOver2R) {
     EXPECT_NEAR(std::hypot(r->truth.x_m, r->truth.y_m), 0.0, 1e-12);
     gyro_sum += r->gyro_wz_radps;
   }
-  const double n = static_cast<double>(rows.size());
+  const auto n = static_cast<double>(rows.size());
   EXPECT_NEAR(gyro_sum / n, 0.6, 4.0 * 0.002 / std::sqrt(n));
 }
 

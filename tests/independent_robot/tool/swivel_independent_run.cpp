@@ -142,7 +142,7 @@ void write_file(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run_tool(int argc, char** argv) {
   CLI::App app{
       "Writes a measured run log (and the nominal robot model) of a robot simulated "
       "independently of Swivel's simulator: a battery case, or a run built by hand."};
@@ -204,4 +204,13 @@ int main(int argc, char** argv) {
   if (!o.model_out.empty()) std::printf("wrote %s: the nominal model\n", o.model_out.c_str());
   std::printf("expected: %s\n", describe(expected_effects(spec), spec).c_str());
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run_tool(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-independent-run: %s\n", e.what());
+    return 1;
+  }
 }
