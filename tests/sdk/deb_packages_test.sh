@@ -4,7 +4,8 @@
 # Builds the two Debian packages from this build, checks what each holds and declares, then
 # unpacks swivel into an empty root and runs the daemon from there, with the configuration,
 # plugins and DDS file the package installed. Installing it with apt on a clean Debian 12 and
-# starting it as its unit does is tools/deb-clean-install (root and the network: not a test).
+# starting it as its unit does is tools/deb-clean-install (root and the network); under
+# systemd as PID 1, ctest swiveld_systemd_install (label systemd_boot).
 set -euo pipefail
 build=$1 cpack=$2
 work=$(mktemp -d)

@@ -2,14 +2,15 @@
 # shellcheck shell=bash disable=SC2154  # its variables are set by tools/deb-clean-install
 # tools/deb-clean-install --systemd: the swivel package under a real systemd as PID 1.
 # Sourced by tools/deb-clean-install once the packages are built; uses its variables
-# (runtime_deb, base, root, logs, mirror, run_s, max_exposure) and helpers (ok, bad, note,
+# (runtime_deb, base, root, logs, mirror, run_s, max_exposure, dxl_emulator) and helpers (ok, bad, note,
 # abort, phase_done, in_root). A fresh copy of a cached minimal bookworm root with systemd
 # gets the package's dependencies from the mirror (chroot, apt-get satisfy), then boots under
 # systemd-nspawn with a private network (nothing leaves the container but loopback). Inside:
 # apt-get install of the package, `systemctl start swiveld` (Type=notify: active once the
 # daemon sent READY=1), swivelctl reading its state, the watchdog, a reload and a stop, and
-# `systemd-analyze security` at most max_exposure; the same with the DDS Security profile and
-# its drop-in; then upgrade, remove, reinstall and purge with the service enabled and running.
+# `systemd-analyze security` at most max_exposure; the daemon driving emulated DYNAMIXEL
+# servos over a serial port; the same with the DDS Security profile and its drop-in; then
+# upgrade, remove, reinstall and purge with the service enabled and running.
 
 container_name=swivel-check
 # The daemon's loop asks for SCHED_FIFO and mlockall: the container keeps CAP_SYS_NICE by
@@ -201,6 +202,67 @@ else
   bad "systemctl stop swiveld: $stop_result (state, result, exit status):"$'\n'"$(tail -n 5 "$logs/journal.log" | sed 's/^/  /')"
 fi
 phase_done run
+
+# --- 4b. The DYNAMIXEL serial bus under the sandbox: the packaged daemon and plugin on two
+# servos that swivel-dxl-emulator (of the build, not packaged) answers for on a
+# pseudo-terminal, a runtime drop-in pointing ExecStart= at a configuration using it.
+if [[ -n $dxl_emulator ]]; then
+  echo "== the DYNAMIXEL bus: swiveld on emulated servos"
+  install -m 755 "$dxl_emulator" "$root/srv/swivel-dxl-emulator"
+  # The pseudo-terminal belongs to the service's user, as a serial port its group may open.
+  in_box systemd-run --quiet --unit=swivel-dxl-emulator -p User=swivel -p RuntimeDirectory=swivel-dxl \
+    /srv/swivel-dxl-emulator --ids 1,2 --link /run/swivel-dxl/port >"$logs/dxl-emulator.log" 2>&1 ||
+    abort "systemd-run swivel-dxl-emulator" "$logs/dxl-emulator.log"
+  for _ in $(seq 50); do in_box test -L /run/swivel-dxl/port && break; sleep 0.1; done
+  cat >"$root/etc/swivel/swiveld-dxl.yaml" <<'YAML'
+loop: {rate_hz: 500}
+robot_model: /etc/swivel/robots/docent.yaml
+hardware:
+  plugin: dynamixel
+  params: {port: /run/swivel-dxl/port, reply_timeout_s: 0.2, stale_timeout_s: 1.0, left: {id: 1}, right: {id: 2, direction: -1}}
+drivetrain: {plugin: differential, params: {max_wheel_rate_radps: 20.0}}
+localization: {plugin: raw_eg, params: {heading_source: encoders}}
+command: {timeout_s: 0.5, source: none}
+YAML
+  in_box mkdir -p /run/systemd/system/swiveld.service.d
+  printf '[Service]\nExecStart=\nExecStart=/usr/bin/swiveld --config /etc/swivel/swiveld-dxl.yaml\n' \
+    >"$logs/dxl-dropin.conf"
+  in_box tee /run/systemd/system/swiveld.service.d/dxl.conf <"$logs/dxl-dropin.conf" >/dev/null
+  in_box systemctl daemon-reload
+  in_box systemctl start swiveld.service >"$logs/start-dxl.log" 2>&1 ||
+    { in_box journalctl -u swiveld.service --no-pager -n 30 >>"$logs/start-dxl.log" 2>&1; abort "systemctl start swiveld on the DYNAMIXEL bus" "$logs/start-dxl.log"; }
+  expect_running "systemctl start swiveld on emulated DYNAMIXEL servos"
+  journal_has "$(unit_show MainPID)" 'hardware dynamixel activated' journal-dxl.log &&
+    ok "the dynamixel plugin opened the serial port and found its servos: $(grep -c 'swiveld info: dynamixel ID' "$logs/journal-dxl.log") of 2" ||
+    bad "the dynamixel plugin did not start on /run/swivel-dxl/port:"$'\n'"$(tail -n 5 "$logs/journal-dxl.log" | sed 's/^/  /')"
+  # Driving 0.2 m/s for 1.5 s: the pose comes from the servos' encoders over the bus.
+  in_box swivelctl drive 0.2 0 0 --for 1.5 >"$logs/dxl-drive.log" 2>&1 || bad "swivelctl drive: $(cat "$logs/dxl-drive.log")"
+  sleep 0.5
+  in_box swivelctl echo state --count 1 --json --timeout 5 >"$logs/dxl-state.json" 2>&1 || true
+  x=$(grep -oE '"x_m": ?[-0-9.e]+' "$logs/dxl-state.json" | grep -oE '[-0-9.e]+$' || true)
+  fault=$(grep -oE '"fault": ?"[^"]*"' "$logs/dxl-state.json" | cut -d'"' -f4 || true)
+  if [[ -n $x && $fault == none ]] && awk -v x="$x" 'BEGIN {exit !(x > 0.2 && x < 0.4)}'; then
+    ok "swivelctl drive 0.2 m/s for 1.5 s: the encoders put the robot at x = $x m, no fault"
+  else
+    bad "after swivelctl drive 0.2 m/s for 1.5 s: x = ${x:-?} m (expected about 0.3), fault ${fault:-?}"
+  fi
+  expect_exposure dxl "on the DYNAMIXEL bus, daemon running"
+  # The daemon first: it brings the servos to rest over the bus before it exits.
+  dxl_pid=$(unit_show MainPID)
+  in_box systemctl stop swiveld.service >/dev/null 2>&1 || true
+  if [[ $(unit_show Result) == success && $(unit_show ExecMainStatus) == 0 ]]; then
+    ok "systemctl stop swiveld on the DYNAMIXEL bus: exit 0"
+  else
+    in_box journalctl --no-pager -o cat _PID="$dxl_pid" >"$logs/journal-dxl.log" 2>&1 || true
+    bad "systemctl stop swiveld on the DYNAMIXEL bus: $(unit_show Result), status $(unit_show ExecMainStatus):"$'\n'"$(tail -n 5 "$logs/journal-dxl.log" | sed 's/^/  /')"
+  fi
+  in_box systemctl stop swivel-dxl-emulator.service >/dev/null 2>&1 || true
+  in_box rm -f /run/systemd/system/swiveld.service.d/dxl.conf /etc/swivel/swiveld-dxl.yaml
+  in_box systemctl daemon-reload
+  phase_done dynamixel
+else
+  note "the DYNAMIXEL bus under the sandbox was not run (--dxl-emulator names no swivel-dxl-emulator)"
+fi
 
 # --- 5. The DDS Security profile and its drop-in.
 echo "== DDS Security: make_profile.sh /etc/swivel/security, the secure drop-in"
