@@ -176,7 +176,7 @@ TEST(PluginFaults, WrongAbiAtSwapTimeIsRefusedAndTheLoopRunsOn) {
   } catch (const PluginError& e) {
     EXPECT_EQ(std::string(e.what()), test_plugin_dir() +
                                          "/swivel_localization_bad_abi.so: ABI version 999, "
-                                         "expected 3 (built for a newer Swivel: rebuild the "
+                                         "expected 4 (built for a newer Swivel: rebuild the "
                                          "plugin against this one's headers)");
   }
   expect_loop_unaffected(rig, before);

@@ -14,15 +14,15 @@
 namespace swivel {
 namespace {
 
-const std::string kDir = SWIVEL_TEST_PLUGIN_DIR;
+const std::string test_plugin_dir = SWIVEL_TEST_PLUGIN_DIR;
 
 std::string file_of(const std::string& name) {
-  return kDir + "/swivel_localization_" + name + ".so";
+  return test_plugin_dir + "/swivel_localization_" + name + ".so";
 }
 
 // The PluginError message of creating localization plugin `name` from the test folder.
 std::string error_of(const std::string& name) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   try {
     loader.create<Localization>(name);
   } catch (const PluginError& e) {
@@ -40,7 +40,7 @@ bool is_loaded(const std::string& file) {
 }
 
 TEST(PluginLoader, CreatesWellBehavedPluginThatWorks) {
-  PluginLoader loader({"/nonexistent/first", kDir});
+  PluginLoader loader({"/nonexistent/first", test_plugin_dir});
   auto loc = loader.create<Localization>("good");
   ASSERT_TRUE(loc);
   EXPECT_EQ(loc.name(), "good");
@@ -57,7 +57,7 @@ TEST(PluginLoader, CreatesWellBehavedPluginThatWorks) {
 }
 
 TEST(PluginLoader, SharesLibraryBetweenInstancesAndUnloadsAfterLast) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   auto first = loader.create<Localization>("good");
   auto second = loader.create<Localization>("good");
   EXPECT_NE(first.get(), second.get());
@@ -70,7 +70,7 @@ TEST(PluginLoader, SharesLibraryBetweenInstancesAndUnloadsAfterLast) {
 }
 
 TEST(PluginLoader, MovedInstanceKeepsLibraryLoaded) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   PluginInstance<Localization> kept;
   {
     auto created = loader.create<Localization>("good");
@@ -82,7 +82,7 @@ TEST(PluginLoader, MovedInstanceKeepsLibraryLoaded) {
 }
 
 TEST(PluginLoader, NotFoundListsEveryDirectorySearched) {
-  PluginLoader loader({"/nonexistent/a", kDir});
+  PluginLoader loader({"/nonexistent/a", test_plugin_dir});
   try {
     loader.create<Localization>("raw_egg");
     FAIL() << "no error";
@@ -90,27 +90,27 @@ TEST(PluginLoader, NotFoundListsEveryDirectorySearched) {
     EXPECT_EQ(std::string(e.what()),
               "localization plugin 'raw_egg' not found: no swivel_localization_raw_egg.so in "
               "/nonexistent/a, " +
-                  kDir + " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
+                  test_plugin_dir + " (set SWIVEL_PLUGIN_PATH or plugin_path to add directories)");
   }
 }
 
 TEST(PluginLoader, RefusesWrongAbiVersion) {
   EXPECT_EQ(error_of("bad_abi"), file_of("bad_abi") +
-                                     ": ABI version 999, expected 3 (built for a newer Swivel: "
+                                     ": ABI version 999, expected 4 (built for a newer Swivel: "
                                      "rebuild the plugin against this one's headers)");
 }
 
 // ABI 2 added the hardware lifecycle hooks; a hardware plugin built before them would be
 // called through a vtable without them.
 TEST(PluginLoader, RefusesHardwarePluginOfTheAbiBeforeTheLifecycleHooks) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   try {
     (void)loader.create<Hardware>("old_abi");
     FAIL() << "no error";
   } catch (const PluginError& e) {
     EXPECT_EQ(std::string(e.what()),
-              kDir +
-                  "/swivel_hardware_old_abi.so: ABI version 1, expected 3 (built for an "
+              test_plugin_dir +
+                  "/swivel_hardware_old_abi.so: ABI version 1, expected 4 (built for an "
                   "older Swivel: rebuild the plugin against this one's headers)");
   }
 }
@@ -129,6 +129,18 @@ TEST(PluginLoader, RefusesAPluginBuiltWithAnotherLayoutAndNamesTheType) {
                 " here (rebuild the plugin against this Swivel's headers, with the same "
                 "compiler)");
   EXPECT_FALSE(is_loaded(file_of("layout_mismatch")));
+}
+
+// Same layouts, but a virtual method in another vtable slot: the host would call update()
+// through the slot of something else.
+TEST(PluginLoader, RefusesAPluginWhoseVtableDiffersAndNamesTheMethod) {
+  const std::string message = error_of("vtable_mismatch");
+  EXPECT_NE(message.find(file_of("vtable_mismatch") +
+                         ": built with another layout of the plugin ABI: virtual method "
+                         "Localization::update differs: slot "),
+            std::string::npos)
+      << message;
+  EXPECT_FALSE(is_loaded(file_of("vtable_mismatch")));
 }
 
 TEST(PluginLoader, RefusesAPluginOfAnotherCxxAbi) {
@@ -188,7 +200,7 @@ TEST(PluginLoader, ReportsUnloadableFile) {
 }
 
 TEST(PluginLoader, ConfigureErrorNamesFileLineAndKey) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   auto loc = loader.create<Localization>("throws_configure");
   YAML::Node config =
       YAML::Load("localization:\n  plugin: throws_configure\n  params:\n    gain: 3\n");
@@ -204,7 +216,7 @@ TEST(PluginLoader, ConfigureErrorNamesFileLineAndKey) {
 }
 
 TEST(PluginLoader, UpdateErrorIsReportedAsStatus) {
-  PluginLoader loader({kDir});
+  PluginLoader loader({test_plugin_dir});
   auto loc = loader.create<Localization>("update_error");
   PluginContext ctx{YAML::Load("{fail_after_cycles: 1}"), "t.yaml", "params", ".", nullptr, 0.001};
   loc->configure(ctx);
@@ -221,7 +233,7 @@ TEST(PluginLoader, DefaultSearchPathStartsWithEnvironmentAndEndsWithInstallDir) 
   EXPECT_EQ(path[0], "/opt/a");
   EXPECT_EQ(path[1], "/opt/b");
   EXPECT_NE(path[2].find("/../lib/swivel/plugins"), std::string::npos) << path[2];
-  EXPECT_EQ(path[2].rfind("/", 0), 0U) << "next to the executable, absolute";
+  EXPECT_EQ(path[2].rfind('/', 0), 0U) << "next to the executable, absolute";
   EXPECT_NE(path[3].find("/swivel/plugins"), std::string::npos) << path[3];
 }
 

@@ -9,14 +9,17 @@
 // up `swivel_plugin_descriptor`, and checks abi_version (first field, always) and kind
 // before calling anything else. Bump SWIVEL_PLUGIN_ABI_VERSION whenever a plugin interface
 // changes. What a version number cannot catch (a type that crossed the boundary changed
-// size, a plugin built with another C++ ABI) the descriptor's fingerprint does: the size and
-// alignment of every type that crosses the boundary and the compiler's C++ ABI, as the
-// plugin was compiled (abi_fingerprint.hpp); the loader compares them with its own.
+// size, a virtual method moved, a plugin built with another C++ ABI) the descriptor's
+// fingerprint does: the size and alignment of every type that crosses the boundary, the
+// vtable slot and signature of every virtual method of the interfaces and the compiler's C++
+// ABI, as the plugin was compiled (abi_fingerprint.hpp, from the one list in
+// abi_boundary.hpp); the loader compares them with its own.
 //
 // ABI versions:
 //   1  the first plugin interfaces
 //   2  Hardware gains the lifecycle hooks activate(), deactivate() and on_error()
 //   3  the descriptor carries the layout fingerprint
+//   4  the fingerprint covers the calibration types and the interfaces' vtables
 
 #include <array>
 #include <cstdint>
@@ -27,7 +30,7 @@
 // NOLINTBEGIN(readability-identifier-naming,modernize-use-using,modernize-redundant-void-arg)
 extern "C" {
 
-#define SWIVEL_PLUGIN_ABI_VERSION 3u
+#define SWIVEL_PLUGIN_ABI_VERSION 4u
 #define SWIVEL_PLUGIN_ENTRY_POINT "swivel_plugin_descriptor"
 
 enum SwivelPluginKind : std::uint32_t {
@@ -37,11 +40,20 @@ enum SwivelPluginKind : std::uint32_t {
   SWIVEL_PLUGIN_CALIBRATION = 4,
 };
 
-/// Size and alignment of one type that crosses the plugin boundary.
+/// Size and alignment of one type that crosses the plugin boundary (ABI 4 on: with the
+/// number of vtable slots of an interface).
 struct SwivelAbiLayout {
   const char* type;  ///< e.g. "HardwareState"
   std::uint32_t size;
   std::uint32_t align;
+  std::uint32_t vtable_slots;  ///< an interface's, destructors included; 0 for a plain type
+};
+
+/// Where one virtual method of a plugin interface sits in its vtable (ABI 4 on).
+struct SwivelAbiVirtual {
+  const char* method;     ///< e.g. "Hardware::read"
+  const char* signature;  ///< the mangled type of its member pointer (parameters, noexcept)
+  std::uint32_t slot;     ///< vtable index
 };
 
 /// How the plugin was compiled, as far as the host can check it (ABI 3 on).
@@ -50,6 +62,8 @@ struct SwivelAbiFingerprint {
   std::uint32_t cxx11_string_abi;  ///< _GLIBCXX_USE_CXX11_ABI: std::string's layout
   std::uint32_t layout_count;
   const SwivelAbiLayout* layouts;
+  std::uint32_t virtual_count;  ///< ABI 4 on
+  const SwivelAbiVirtual* virtuals;
 };
 
 struct SwivelPluginDescriptor {

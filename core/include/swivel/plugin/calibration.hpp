@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "swivel/plugin/abi.hpp"
-#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/robot_model.hpp"
 #include "swivel/types.hpp"
@@ -105,3 +104,6 @@ class Calibration {
 };
 
 }  // namespace swivel
+
+// The fingerprint SWIVEL_EXPORT_PLUGIN puts in the descriptor; it needs this interface whole.
+#include "swivel/plugin/abi_fingerprint.hpp"  // IWYU pragma: export

@@ -5,7 +5,6 @@
 #include <span>
 
 #include "swivel/plugin/abi.hpp"
-#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 
@@ -37,3 +36,6 @@ class Drivetrain {
 };
 
 }  // namespace swivel
+
+// The fingerprint SWIVEL_EXPORT_PLUGIN puts in the descriptor; it needs this interface whole.
+#include "swivel/plugin/abi_fingerprint.hpp"  // IWYU pragma: export

@@ -31,7 +31,6 @@
 // enable sequence); read(), write() and on_error() are real-time methods.
 
 #include "swivel/plugin/abi.hpp"
-#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 
@@ -76,3 +75,6 @@ class Hardware {
 };
 
 }  // namespace swivel
+
+// The fingerprint SWIVEL_EXPORT_PLUGIN puts in the descriptor; it needs this interface whole.
+#include "swivel/plugin/abi_fingerprint.hpp"  // IWYU pragma: export

@@ -4,7 +4,6 @@
 // source provides them, absolute pose fixes (HardwareState::motion_capture).
 
 #include "swivel/plugin/abi.hpp"
-#include "swivel/plugin/abi_fingerprint.hpp"
 #include "swivel/plugin/plugin_context.hpp"
 #include "swivel/types.hpp"
 
@@ -36,3 +35,6 @@ class Localization {
 };
 
 }  // namespace swivel
+
+// The fingerprint SWIVEL_EXPORT_PLUGIN puts in the descriptor; it needs this interface whole.
+#include "swivel/plugin/abi_fingerprint.hpp"  // IWYU pragma: export
