@@ -133,6 +133,16 @@ journal_has() {
   done
   return 1
 }
+# start_or_abort LOG WHAT: systemctl start swiveld, or the check ends with the unit's status
+# and the last lines of its journal (journald may write the failing process's lines a moment
+# after systemctl returns).
+start_or_abort() {
+  in_box systemctl start swiveld.service >"$logs/$1.log" 2>&1 && return 0
+  sleep 1
+  { in_box systemctl status --no-pager -n 0 swiveld.service
+    in_box journalctl -u swiveld.service --no-pager -n 15 -o cat; } >>"$logs/$1.log" 2>&1
+  abort "$2" "$logs/$1.log"
+}
 # exposure: the overall exposure systemd-analyze security gives the loaded unit.
 exposure() {
   in_box systemd-analyze security --no-pager swiveld.service >"$logs/security-$1.log" 2>&1 || true
@@ -153,8 +163,7 @@ expect_exposure() {  # expect_exposure LOG-NAME WHAT: the score also in last_sco
 
 echo "== systemctl start swiveld"
 t0=$SECONDS
-in_box systemctl start swiveld.service >"$logs/start.log" 2>&1 ||
-  { in_box journalctl -u swiveld.service --no-pager -n 30 >>"$logs/start.log" 2>&1; abort "systemctl start swiveld" "$logs/start.log"; }
+start_or_abort start "systemctl start swiveld"
 expect_running "systemctl start swiveld (Type=notify: READY=1) in $((SECONDS - t0)) s"
 main_pid=$(unit_show MainPID)
 journal_has "$main_pid" 'CYCLONEDDS_URI=file:///etc/swivel/dds/cyclonedds.xml (environment' journal.log &&
@@ -214,6 +223,10 @@ if [[ -n $dxl_emulator ]]; then
     /srv/swivel-dxl-emulator --ids 1,2 --link /run/swivel-dxl/port >"$logs/dxl-emulator.log" 2>&1 ||
     abort "systemd-run swivel-dxl-emulator" "$logs/dxl-emulator.log"
   for _ in $(seq 50); do in_box test -L /run/swivel-dxl/port && break; sleep 0.1; done
+  if ! in_box test -L /run/swivel-dxl/port; then
+    in_box journalctl -u swivel-dxl-emulator.service --no-pager -n 10 >>"$logs/dxl-emulator.log" 2>&1
+    abort "$dxl_emulator made no /run/swivel-dxl/port in the container" "$logs/dxl-emulator.log"
+  fi
   cat >"$root/etc/swivel/swiveld-dxl.yaml" <<'YAML'
 loop: {rate_hz: 500}
 robot_model: /etc/swivel/robots/docent.yaml
@@ -229,8 +242,7 @@ YAML
     >"$logs/dxl-dropin.conf"
   in_box tee /run/systemd/system/swiveld.service.d/dxl.conf <"$logs/dxl-dropin.conf" >/dev/null
   in_box systemctl daemon-reload
-  in_box systemctl start swiveld.service >"$logs/start-dxl.log" 2>&1 ||
-    { in_box journalctl -u swiveld.service --no-pager -n 30 >>"$logs/start-dxl.log" 2>&1; abort "systemctl start swiveld on the DYNAMIXEL bus" "$logs/start-dxl.log"; }
+  start_or_abort start-dxl "systemctl start swiveld on the DYNAMIXEL bus"
   expect_running "systemctl start swiveld on emulated DYNAMIXEL servos"
   journal_has "$(unit_show MainPID)" 'hardware dynamixel activated' journal-dxl.log &&
     ok "the dynamixel plugin opened the serial port and found its servos: $(grep -c 'swiveld info: dynamixel ID' "$logs/journal-dxl.log") of 2" ||
@@ -277,8 +289,7 @@ in_box systemctl daemon-reload
 secure_uri=file://$security/identities/swiveld/cyclonedds.xml
 [[ $(unit_show Environment) == *"CYCLONEDDS_URI=$secure_uri"* ]] ||
   bad "with the drop-in systemd gives swiveld $(unit_show Environment), not CYCLONEDDS_URI=$secure_uri"
-in_box systemctl start swiveld.service >"$logs/start-secure.log" 2>&1 ||
-  { in_box journalctl -u swiveld.service --no-pager -n 30 >>"$logs/start-secure.log" 2>&1; abort "systemctl start swiveld with the drop-in" "$logs/start-secure.log"; }
+start_or_abort start-secure "systemctl start swiveld with the drop-in"
 expect_running "systemctl start swiveld with the secure drop-in"
 journal_has "$(unit_show MainPID)" "CYCLONEDDS_URI=$secure_uri (environment" journal-secure.log &&
   ok "secured swiveld's DDS configuration: $secure_uri" ||
@@ -325,8 +336,7 @@ else
 fi
 in_box DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "$newer_deb" >"$logs/apt-reinstall.log" 2>&1 ||
   abort "apt-get install swivel (reinstall)" "$logs/apt-reinstall.log"
-in_box systemctl start swiveld.service >"$logs/start-reinstalled.log" 2>&1 ||
-  { in_box journalctl -u swiveld.service --no-pager -n 30 >>"$logs/start-reinstalled.log" 2>&1; abort "systemctl start swiveld after the reinstall" "$logs/start-reinstalled.log"; }
+start_or_abort start-reinstalled "systemctl start swiveld after the reinstall"
 expect_running "reinstall: enabled $(in_box systemctl is-enabled swiveld.service 2>&1), started on the kept configuration"
 expect_exposure reinstalled "reinstalled, with the drop-in, daemon running"
 in_box DEBIAN_FRONTEND=noninteractive apt-get purge -y swivel >"$logs/apt-purge.log" 2>&1 ||
