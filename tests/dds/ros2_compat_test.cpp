@@ -19,6 +19,7 @@
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/options.hpp"
+#include "swivel/dds/ros_covariance.hpp"
 #include "swivel/dds/topics.hpp"
 
 namespace swivel::dds {
@@ -88,7 +89,12 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   EXPECT_DOUBLE_EQ(odom.pose.covariance[6], 4.0);
   EXPECT_DOUBLE_EQ(odom.pose.covariance[30], 7.0);
   EXPECT_DOUBLE_EQ(odom.pose.covariance[35], 9.0);
-  EXPECT_DOUBLE_EQ(odom.pose.covariance[14], 0.0);
+  // z, roll and pitch are constrained by the plane: a small variance, never an exact zero.
+  for (const std::size_t i : {14, 21, 28}) {
+    EXPECT_DOUBLE_EQ(odom.pose.covariance[i], kConstrainedVariance) << i;
+    EXPECT_DOUBLE_EQ(odom.twist.covariance[i], kConstrainedVariance) << i;
+  }
+  EXPECT_DOUBLE_EQ(odom.pose.covariance[2], 0.0);
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.x, 0.5);
   EXPECT_DOUBLE_EQ(odom.twist.twist.linear.y, 0.1);
   EXPECT_DOUBLE_EQ(odom.twist.twist.angular.z, -0.2);
@@ -99,7 +105,6 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   EXPECT_DOUBLE_EQ(odom.twist.covariance[7], 15.0);
   EXPECT_DOUBLE_EQ(odom.twist.covariance[30], 17.0);
   EXPECT_DOUBLE_EQ(odom.twist.covariance[35], 19.0);
-  EXPECT_DOUBLE_EQ(odom.twist.covariance[14], 0.0);
 
   // What a ROS 2 node discovers: the type name and plain CDR only.
   dds_instance_handle_t publications[4];

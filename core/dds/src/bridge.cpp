@@ -21,6 +21,7 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/clock.hpp"
+#include "swivel/dds/ros_covariance.hpp"
 #include "swivel/dds/topics.hpp"
 #include "swivel/rt/clock_offset.hpp"
 #include "take_all.hpp"
@@ -407,27 +408,13 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
     odom.pose.pose.position.y = s.estimate.pose.y_m;
     auto& q = odom.pose.pose.orientation;
     yaw_to_quaternion(s.estimate.pose.yaw_rad, q.x, q.y, q.z, q.w);
-    if (s.estimate.has_covariance) {
-      // (x, y, yaw) of the planar estimate sit at rows/columns (0, 1, 5) of ROS's 6x6.
-      constexpr std::array<int, 3> kIndex{0, 1, 5};
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          odom.pose.covariance[kIndex[r] * 6 + kIndex[c]] = s.estimate.covariance[r * 3 + c];
-        }
-      }
-    }
+    to_ros_covariance(s.estimate.has_covariance ? &s.estimate.covariance : nullptr,
+                      odom.pose.covariance);
     odom.twist.twist.linear.x = s.odometry_twist.vx_mps;
     odom.twist.twist.linear.y = s.odometry_twist.vy_mps;
     odom.twist.twist.angular.z = s.odometry_twist.wz_radps;
-    if (s.has_twist_covariance) {
-      // (vx, vy, wz) sit at rows/columns (0, 1, 5) of ROS's 6x6 as well.
-      constexpr std::array<int, 3> kIndex{0, 1, 5};
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          odom.twist.covariance[kIndex[r] * 6 + kIndex[c]] = s.twist_covariance[r * 3 + c];
-        }
-      }
-    }
+    to_ros_covariance(s.has_twist_covariance ? &s.twist_covariance : nullptr,
+                      odom.twist.covariance);
     check(dds_write(dds_->odom_writer, &odom), "dds_write(odom)");
   }
 
