@@ -21,6 +21,12 @@ RunRecorder::RunRecorder(std::string path, double rate_hz, const RobotModel& rob
   RunLogHeader header = run_log_header(robot);
   header.comments.push_back("recorded by swiveld from " + config_file + " at " +
                             std::to_string(rate_hz) + " Hz");
+  // The truth columns hold only the hardware's own ground truth (Hardware::ground_truth: a
+  // simulation's pose of the robot's reference point, read in the same cycle), never an
+  // external motion capture: the model-gap workflow need not fit a clock offset or a tracked
+  // body's lever arm and yaw offset for it.
+  header.comments.emplace_back("truth_clock: shared");
+  header.comments.emplace_back("truth_frame: robot");
   writer_ = std::make_unique<RunLogWriter>(path_, header);
 }
 
