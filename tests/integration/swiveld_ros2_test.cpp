@@ -68,7 +68,9 @@ TEST(SwiveldRos2, OdometryTransformJointStatesAndDiagnosticsFromOneDaemon) {
   const dds_entity_t diagnostics =
       reader(&diagnostic_msgs_msg_dds__DiagnosticArray__desc, "rt/diagnostics");
 
-  std::set<std::int64_t> odom_stamps, tf_stamps, joint_stamps;
+  std::set<std::int64_t> odom_stamps;
+  std::set<std::int64_t> tf_stamps;
+  std::set<std::int64_t> joint_stamps;
   std::vector<std::string> joint_names;
   std::size_t velocities = 0;
   std::string diagnostic_name;
@@ -112,7 +114,7 @@ TEST(SwiveldRos2, OdometryTransformJointStatesAndDiagnosticsFromOneDaemon) {
   // are common to all three (a reader may miss a sample at the edges of the window).
   std::size_t common = 0;
   for (const std::int64_t s : tf_stamps) {
-    if (odom_stamps.count(s) != 0 && joint_stamps.count(s) != 0) ++common;
+    if (odom_stamps.contains(s) && joint_stamps.contains(s)) ++common;
   }
   EXPECT_GE(common, tf_stamps.size() - 10);
   // ROS time: within a second of this host's realtime clock.

@@ -22,8 +22,8 @@ namespace {
 template <class Interface>
 class Loaded {
  public:
-  Loaded(const char* file, const char* params_yaml, const swivel::RobotModel& robot) {
-    handle_ = dlopen(file, RTLD_NOW | RTLD_LOCAL);
+  Loaded(const char* file, const char* params_yaml, const swivel::RobotModel& robot)
+      : handle_(dlopen(file, RTLD_NOW | RTLD_LOCAL)) {
     if (handle_ == nullptr) throw std::runtime_error(std::string("dlopen: ") + dlerror());
     auto entry =
         reinterpret_cast<SwivelPluginEntryPoint>(dlsym(handle_, SWIVEL_PLUGIN_ENTRY_POINT));
@@ -73,7 +73,7 @@ void run_localization(benchmark::State& state, const char* file, const char* par
   readings.gyro_valid = true;
   readings.gyro_wz_radps = 0.0501;
   long cycle = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     readings.stamp_s = 0.001 * static_cast<double>(++cycle);
     readings.motion_capture.valid = with_fixes && cycle % 10 == 0;
     readings.motion_capture.pose = loc->estimate().pose;
@@ -85,38 +85,39 @@ void run_localization(benchmark::State& state, const char* file, const char* par
   }
 }
 
-void BM_RawEg(benchmark::State& s) { run_localization(s, SWIVEL_BENCH_RAW_EG, "{}", false); }
-void BM_KalmanEkf(benchmark::State& s) {
+void raw_eg(benchmark::State& s) { run_localization(s, SWIVEL_BENCH_RAW_EG, "{}", false); }
+void kalman_ekf(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_KALMAN, "{mode: ekf}", false);
 }
-void BM_KalmanEkfWithPoseFixes(benchmark::State& s) {
+void kalman_ekf_with_pose_fixes(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_KALMAN, "{mode: ekf}", true);
 }
-void BM_KalmanLcakf(benchmark::State& s) {
+void kalman_lcakf(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_KALMAN, "{mode: lcakf}", false);
 }
-void BM_LsmPaper(benchmark::State& s) {
+void lsm_paper(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_LSM, "{mode: paper}", false);
 }
 // Worst case: a sample stored and a window fitted on every cycle.
-void BM_LsmPaperEveryCycle(benchmark::State& s) {
+void lsm_paper_every_cycle(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_LSM, "{mode: paper, sample_distance_m: 0}", false);
 }
-void BM_LsmHeadingAligned(benchmark::State& s) {
+void lsm_heading_aligned(benchmark::State& s) {
   run_localization(s, SWIVEL_BENCH_LSM, "{mode: heading_aligned}", false);
 }
 
-void BM_DifferentialForwardInverse(benchmark::State& state) {
+void differential_forward_inverse(benchmark::State& state) {
   const swivel::RobotModel robot = docent();
   Loaded<swivel::Drivetrain> dt(SWIVEL_BENCH_DIFFERENTIAL, "{}", robot);
-  swivel::HardwareState prev, cur;
+  swivel::HardwareState prev;
+  swivel::HardwareState cur;
   prev.module_count = cur.module_count = 2;
   swivel::OdometryIncrement odo;
   swivel::ActuatorCommand cmd;
   swivel::Twist2 applied;
   const swivel::Twist2 command{0.3, 0.0, 0.05};
   long cycle = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto iteration : state) {
     ++cycle;
     prev = cur;
     cur.stamp_s = 0.001 * static_cast<double>(cycle);
@@ -134,11 +135,11 @@ void BM_DifferentialForwardInverse(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_RawEg);
-BENCHMARK(BM_KalmanEkf);
-BENCHMARK(BM_KalmanEkfWithPoseFixes);
-BENCHMARK(BM_KalmanLcakf);
-BENCHMARK(BM_LsmPaper);
-BENCHMARK(BM_LsmPaperEveryCycle);
-BENCHMARK(BM_LsmHeadingAligned);
-BENCHMARK(BM_DifferentialForwardInverse);
+BENCHMARK(raw_eg);
+BENCHMARK(kalman_ekf);
+BENCHMARK(kalman_ekf_with_pose_fixes);
+BENCHMARK(kalman_lcakf);
+BENCHMARK(lsm_paper);
+BENCHMARK(lsm_paper_every_cycle);
+BENCHMARK(lsm_heading_aligned);
+BENCHMARK(differential_forward_inverse);
