@@ -48,6 +48,30 @@ TEST(CommandFaults, StreamThatStopsTimesOutToZero) {
   EXPECT_NEAR(rig.state().command_twist.vx_mps, kVxMps, 1e-12);
 }
 
+// Nav2 sends a zero twist at the end of every goal and then nothing: the robot is idle, which
+// is no fault (diagnostics stay OK), however long the silence lasts.
+TEST(CommandFaults, StreamThatEndsWithAStopIdlesWithoutAFault) {
+  FaultRig rig;
+  rig.drive(kVxMps, 0.0, 0.0, 300);
+  rig.drive(0.0, 0.0, 0.0, 50);  // the source's last commands: a stop
+  const StateSnapshot stopped = rig.state();
+  rig.step(3000);  // six timeouts of silence
+  const StateSnapshot idle = rig.state();
+  EXPECT_EQ(idle.mode, LoopMode::kIdle);
+  EXPECT_EQ(idle.fault, FaultCode::kNone) << fault_code_name(idle.fault);
+  EXPECT_EQ(idle.fault_detail[0], '\0');
+  EXPECT_EQ(idle.fault_count, stopped.fault_count);
+  EXPECT_EQ(max_wheel_setpoint(idle), 0.0);
+  EXPECT_EQ(rig.log().find("command_timeout"), std::string::npos) << rig.log();
+
+  // The same stream going silent inside a motion is a timeout again.
+  rig.drive(kVxMps, 0.0, 0.0, 100);
+  rig.step(600);
+  EXPECT_EQ(rig.state().fault, FaultCode::kCommandTimeout);
+  EXPECT_EQ(rig.state().fault_count, stopped.fault_count + 1);
+  EXPECT_EQ(max_wheel_setpoint(rig.state()), 0.0);
+}
+
 TEST(CommandFaults, NonFiniteCommandIsRejectedAndStops) {
   FaultRig rig;
   rig.drive(kVxMps, 0.0, 0.0, 300);
@@ -128,7 +152,7 @@ TEST(CommandFaults, FloodKeepsTheNewestCommand) {
         VelocityCommand cmd;
         cmd.twist.vx_mps = k == kPerCycle ? last_vx(c) : 0.001 * k;
         cmd.received_s = rig.t_s + FaultRig::kDtS;  // the cycle about to run
-        cmd.sequence = static_cast<std::uint64_t>(c * kPerCycle + k);
+        cmd.sequence = (static_cast<std::uint64_t>(c) * kPerCycle) + static_cast<std::uint64_t>(k);
         if (!rig.loop->push_command(cmd)) refused.fetch_add(1, std::memory_order_relaxed);
       }
       done.store(c, std::memory_order_release);

@@ -30,6 +30,10 @@ class Daemon {
     child_.reset();
     std::filesystem::remove_all(dir_);
   }
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+  Daemon(Daemon&&) = delete;
+  Daemon& operator=(Daemon&&) = delete;
 
   [[nodiscard]] std::string config() const { return dir_ + "/swiveld.yaml"; }
   void write(const std::string& hardware, const std::string& localization) const {
@@ -46,7 +50,7 @@ class Daemon {
     write_by_rename(config(), y.str());
   }
 
-  ToolRun ctl(std::vector<std::string> args) const {
+  [[nodiscard]] ToolRun ctl(std::vector<std::string> args) const {
     for (const std::string& a :
          {std::string("--robot"), robot_, std::string("--domain"), std::to_string(domain_),
           std::string("--timeout"), std::string("10")}) {
@@ -54,7 +58,7 @@ class Daemon {
     }
     return swivelctl(args);
   }
-  json state() const {
+  [[nodiscard]] json state() const {
     const ToolRun run = ctl({"echo", "state", "--json", "--count", "1"});
     EXPECT_EQ(run.exit_code, 0) << run.err;
     return run.out.empty() ? json{} : json::parse(lines_of(run.out).front());
@@ -71,7 +75,8 @@ class Daemon {
     return s;
   }
   Child& process() { return *child_; }
-  const std::string& robot() const { return robot_; }
+  [[nodiscard]] const std::string& robot() const { return robot_; }
+  [[nodiscard]] int domain() const { return domain_; }
 
  private:
   std::string robot_;
@@ -81,8 +86,9 @@ class Daemon {
 };
 
 // A stall of the simulated hardware from 1 s to 6 s of sim time: a clear during it is
-// refused with the cause, one after it is accepted, and the robot drives again. A clear
-// while no command comes is refused as well.
+// refused with the cause, one after it is accepted, and the robot drives again. A command
+// stream that ended with a stop leaves nothing to clear; one that went silent mid-motion is a
+// timeout, and a clear of it is refused.
 TEST(SwiveldRecovery, ClearIsRefusedWhileTheHardwareStallsAndAcceptedAfterwards) {
   Daemon daemon("it_clear", 73,
                 "{plugin: sim, params: {faults: [{kind: stall, start_s: 1.0, duration_s: 5.0}]}}",
@@ -112,7 +118,24 @@ TEST(SwiveldRecovery, ClearIsRefusedWhileTheHardwareStallsAndAcceptedAfterwards)
   const ToolRun drive = daemon.ctl({"drive", "0.2", "0", "0", "--for", "1"});
   EXPECT_EQ(drive.exit_code, 0) << drive.err;
   EXPECT_GT(daemon.state()["truth"]["x_m"].get<double>(), 0.05);
-  // The drive is over and its command stream with it: a timeout, which a clear cannot end.
+  // The drive is over, its stream ended with a stop: past the timeout the robot is idle, which
+  // is no fault.
+  std::this_thread::sleep_for(Seconds(1.0));
+  const json idle = daemon.state();
+  EXPECT_EQ(idle["mode"], "idle") << idle.dump();
+  EXPECT_EQ(idle["fault"], "none") << idle.dump();
+  const ToolRun nothing = daemon.ctl({"clear"});
+  EXPECT_EQ(nothing.exit_code, 0) << nothing.out << nothing.err;
+  EXPECT_EQ(nothing.out, daemon.robot() + ": clear: nothing to clear\n");
+
+  // A stream that goes silent inside a motion is a timeout, which a clear cannot end.
+  {
+    Child moving(swivelctl_exe(), {"drive", "0.2", "0", "0", "--robot", daemon.robot(), "--domain",
+                                   std::to_string(daemon.domain()), "--timeout", "10"});
+    daemon.wait_for([](const json& s) { return s["mode"] == "velocity"; });
+    moving.signal(SIGKILL);  // no final stop
+    moving.wait_for(Seconds(5));
+  }
   daemon.wait_for([](const json& s) { return s["fault"] == "command_timeout"; });
   const ToolRun absent = daemon.ctl({"clear"});
   EXPECT_EQ(absent.exit_code, 1);

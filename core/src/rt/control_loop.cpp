@@ -20,6 +20,10 @@ bool finite(const Twist2& t) noexcept {
   return finite(t.vx_mps) && finite(t.vy_mps) && finite(t.wz_radps);
 }
 
+bool is_zero(const Twist2& t) noexcept {
+  return t.vx_mps == 0.0 && t.vy_mps == 0.0 && t.wz_radps == 0.0;
+}
+
 bool finite(const Pose2& p) noexcept { return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad); }
 
 // The first non-finite field of a reading, as a static cause text; nullptr when all finite.
@@ -950,7 +954,11 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   if (stopping_) has_command_ = false;  // shutting down: no command moves the robot again
   if (has_command_ && now_s - command_.received_s > options_.command_timeout_s) {
     has_command_ = false;
-    raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
+    // A stream whose last word was a stop (Nav2 after every goal, a teleop released) has
+    // simply ended: the robot is idle, not faulty. Only one that went silent mid-motion is.
+    if (!is_zero(command_.twist)) {
+      raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
+    }
   }
 
   // Command -> limits -> setpoints -> hardware. A calibration writes module setpoints itself.

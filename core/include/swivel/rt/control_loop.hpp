@@ -20,8 +20,9 @@
 //    clean cycle; request_clear() is answered at the next cycle, refused while the cause
 //    persists); the velocity command seen before is then discarded so that only a fresh one
 //    moves the robot again;
-//  - the newest velocity command older than command_timeout_s: mode kIdle with fault
-//    kCommandTimeout; a fresh valid command resumes;
+//  - the newest velocity command older than command_timeout_s: mode kIdle, with fault
+//    kCommandTimeout only when that command asked for motion (a stream whose last command
+//    was zero has ended normally: idle without a fault); a fresh valid command resumes;
 //  - a non-finite velocity command: rejected, mode kIdle with fault kNonFiniteCommand; a
 //    fresh valid command resumes;
 //  - a configured external source (LoopOptions::external_sensors: a DDS gyro, a DDS
