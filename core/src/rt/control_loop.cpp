@@ -814,6 +814,25 @@ Twist2 ControlLoop::limit(const Twist2& target, bool stopping, double now_s) noe
   return limiter.step(target, dt_s);
 }
 
+// Readings resumed after a gap: the localization takes the dead-reckoned pose with the
+// covariance widened by what the encoders measured over the gap (`measured`), so that the
+// pose does not jump. False when it refuses: it then continues from its own estimate.
+bool ControlLoop::end_reading_gap(Localization& localization, const OdometryIncrement& measured,
+                                  double now_s) noexcept {
+  const PoseEstimate handed = reading_gap_.resume(measured, now_s);
+  const char* thrown = nullptr;
+  if (guarded([&] { return localization.hand_over(handed); }, thrown) != Status::kOk) {
+    log_event(LogLevel::kWarn, LogCode::kMessage, now_s,
+              "readings resumed: the localization refused the dead-reckoned pose", 0.0, 0.0, 0.0,
+              0.0, thrown != nullptr ? thrown : localization.last_error());
+    return false;
+  }
+  log_event(LogLevel::kInfo, LogCode::kMessage, now_s,
+            "readings resumed: pose kept, covariance widened by the gap's error (m, rad)",
+            reading_gap_.last_position_error_m(), reading_gap_.last_heading_error_rad());
+  return true;
+}
+
 // The drivetrain scaled the twist down to its own wheel or steering limits: the limiter
 // continues from what the robot was commanded, so that a later stop ramps down from the
 // robot's speed and not from one it never reached. Below the floors a drivetrain may fade a
@@ -893,13 +912,20 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   take_motion_capture(now_s, reading_ok);
   check_external_sensors(now_s);
   if (reading_ok && current_.motion_capture.valid) run_sample_mocap_ = current_.motion_capture;
+  if (!reading_ok && has_previous_ && !reading_gap_.active()) {
+    // Readings stopped: the odometry follows the controlled stop until they resume.
+    reading_gap_.begin(state_.estimate, state_.odometry_twist,
+                       state_.has_twist_covariance ? &state_.twist_covariance : nullptr,
+                       has_last_cycle_ ? last_cycle_s_ : now_s);
+  }
+  const bool resuming = reading_ok && reading_gap_.active();
 
   // Odometry and localization. The twist window goes first: its forward kinematics calls
   // leave the drivetrain's module states to the cycle's own call.
   OdometryIncrement odometry;
   bool twist_ok = false;
   if (reading_ok) {
-    if (!has_previous_) twist_window_.reset();
+    if (!has_previous_ || resuming) twist_window_.reset();  // no fit across missing readings
     twist_window_.push(current_);
   }
   if (reading_ok && has_previous_) {
@@ -913,6 +939,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
       // An encoder jump must not stay in the window once the fault is cleared.
       twist_window_.reset();
       twist_ok = false;
+    } else if (resuming && end_reading_gap(localization, odometry, now_s)) {
+      // The motion over the gap went into the handed-over covariance, not into the pose.
     } else if (guarded([&] { return localization.update(odometry, current_); }, thrown) !=
                Status::kOk) {
       raise_fault(FaultCode::kLocalizationError, now_s,
@@ -923,6 +951,11 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
       raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose covariance");
     }
     if (odometry.valid) check_odometry(odometry, now_s);
+  }
+  if (resuming && reading_gap_.active()) {
+    // Nothing measured over the gap (the hardware was paused, or the drivetrain refused the
+    // increment): the dead-reckoned pose is all there is.
+    (void)end_reading_gap(localization, OdometryIncrement{}, now_s);
   }
 
   // Leaving safe stop: only on request and only in a cycle without a fault.
@@ -1010,6 +1043,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   } else {
     last_write_zero_ = all_zero(setpoints_);
   }
+  if (reading_gap_.active()) reading_gap_.advance(applied, now_s);
   if (reading_ok) {
     previous_ = current_;
     has_previous_ = true;
@@ -1031,7 +1065,8 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   ++state_.cycle;
   state_.stamp_s = now_s;
   state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
-  state_.estimate = publishable(localization.estimate());
+  state_.estimate =
+      reading_gap_.active() ? reading_gap_.estimate() : publishable(localization.estimate());
   if (twist_ok) {
     state_.odometry_twist = twist_estimate_.twist;
     state_.twist_covariance = twist_estimate_.covariance;
@@ -1039,6 +1074,12 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     state_.wheel_rate_radps = twist_estimate_.wheel_rate_radps;
     state_.steer_rate_radps = twist_estimate_.steer_rate_radps;
     state_.has_joint_rates = true;
+    reading_gap_.forget_twist();
+  } else if (reading_gap_.has_twist()) {
+    state_.odometry_twist = reading_gap_.twist();
+    state_.twist_covariance = reading_gap_.twist_covariance();
+    state_.has_twist_covariance = reading_gap_.has_twist_covariance();
+    state_.has_joint_rates = false;
   } else {
     state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
     state_.twist_covariance = {};

@@ -79,6 +79,7 @@
 #include "swivel/rt/external_sensors.hpp"
 #include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/odometry_monitor.hpp"
+#include "swivel/rt/reading_gap.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
 #include "swivel/rt/run_sample.hpp"
@@ -429,6 +430,8 @@ class ControlLoop {
   void clear_latched_fault(double now_s) noexcept;
   Twist2 limit(const Twist2& target, bool stopping, double now_s) noexcept;
   void follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept;
+  bool end_reading_gap(Localization& localization, const OdometryIncrement& measured,
+                       double now_s) noexcept;
   template <class Call>
   static Status guarded(Call&& call, const char*& thrown) noexcept;
   void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
@@ -504,6 +507,7 @@ class ControlLoop {
   OdometryMonitor odometry_monitor_;
   TwistWindow twist_window_;
   TwistEstimate twist_estimate_{};
+  ReadingGap reading_gap_;                          // odometry while readings are missing
   motion::TwistLimiter command_limiter_;            // the robot model's limits
   motion::TwistLimiter stop_limiter_;               // the same, with the stop deceleration
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
