@@ -88,7 +88,7 @@ class Keys:
 
     def key(self, source):
         entry = self.sources.get(source)
-        if entry is None:
+        if entry is None or not os.path.isfile(os.path.join(self.repo, source)):
             return None
         words = shlex.split(entry["command"])
         if "-o" in words:
