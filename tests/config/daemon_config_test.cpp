@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "swivel/config/config_error.hpp"
 
@@ -14,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kValid = R"(loop:
+constexpr const char* kValid = R"(loop:
   rate_hz: 500
   fifo_priority: 70
   realtime: false
@@ -85,6 +86,28 @@ class DaemonConfigTest : public testing::Test {
 
   fs::path dir_;
 };
+
+// A reload assigns the new file's localization slot to the running one. The running slot
+// must then refer to the new document alone: YAML::Node's own assignment would turn the old
+// params node, still held by whatever was configured from it, into an alias of the new one,
+// and keep every document the slot was ever given alive in one merged pool.
+TEST_F(DaemonConfigTest, AssigningASlotLeavesTheOldParamsAsTheyWere) {
+  const std::string gyro = replaced(kValid, "heading_source: encoders", "heading_source: gyro");
+  DaemonConfig running = load(kValid);
+  const YAML::Node held = running.localization.params;  // as a plugin's context holds it
+  const DaemonConfig fresh = load(gyro);
+  running.localization = fresh.localization;
+  EXPECT_TRUE(running.localization.params.is(fresh.localization.params));
+  EXPECT_EQ(running.localization.params["heading_source"].as<std::string>(), "gyro");
+  EXPECT_EQ(held["heading_source"].as<std::string>(), "encoders");
+
+  DaemonConfig moved_into = load(kValid);
+  const YAML::Node held_before_move = moved_into.localization.params;
+  PluginConfig incoming = load(gyro).localization;
+  moved_into.localization = std::move(incoming);
+  EXPECT_EQ(moved_into.localization.params["heading_source"].as<std::string>(), "gyro");
+  EXPECT_EQ(held_before_move["heading_source"].as<std::string>(), "encoders");
+}
 
 TEST_F(DaemonConfigTest, ReadsEverySection) {
   const DaemonConfig c = load(kValid);

@@ -6,12 +6,32 @@
 #include <algorithm>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
 #include "swivel/robot_model_io.hpp"
 
 namespace swivel::daemon {
+
+PluginConfig& PluginConfig::operator=(const PluginConfig& other) {
+  if (this == &other) return *this;
+  plugin = other.plugin;
+  params.reset(other.params);
+  params_path = other.params_path;
+  where = other.where;
+  return *this;
+}
+
+// NOLINTNEXTLINE(performance-noexcept-move-constructor,bugprone-exception-escape): see the header
+PluginConfig& PluginConfig::operator=(PluginConfig&& other) {
+  plugin = std::move(other.plugin);
+  params.reset(other.params);
+  params_path = std::move(other.params_path);
+  where = std::move(other.where);
+  return *this;
+}
+
 namespace {
 
 std::string resolve(const std::string& dir, const std::string& path) {

@@ -14,12 +14,26 @@
 namespace swivel::daemon {
 
 /// One plugin slot: `{plugin: NAME, params: {...}}`. The plugin validates its own params.
+///
+/// Assigning a slot makes `params` refer to the other slot's node (YAML::Node::reset()).
+/// YAML::Node's own assignment would instead merge the other document's node pool into this
+/// one's, for as long as either lives: the running slot, assigned the slot of each swap a
+/// reload brings, kept every such configuration file (about 70 KB each for the default one).
 // NOLINTNEXTLINE(bugprone-exception-escape): YAML::Node moves by copying, which may allocate
 struct PluginConfig {
   std::string plugin;       ///< plugin name, e.g. "differential"
   YAML::Node params;        ///< the `params:` mapping (null when absent)
   std::string params_path;  ///< "drivetrain.params", for messages
   std::string where;        ///< "swiveld.yaml:14:11: drivetrain.plugin:", for messages
+
+  PluginConfig() = default;
+  PluginConfig(const PluginConfig&) = default;  // shares the other's node: nothing merges
+  PluginConfig(PluginConfig&&) = default;
+  PluginConfig& operator=(const PluginConfig& other);
+  // Throws as YAML::Node's own assignment does, for an invalid node (a failed lookup's).
+  // NOLINTNEXTLINE(performance-noexcept-move-constructor,bugprone-exception-escape)
+  PluginConfig& operator=(PluginConfig&& other);
+  ~PluginConfig() = default;
 };
 
 /// One step of the built-in motion script: hold `twist` for `duration_s`.
