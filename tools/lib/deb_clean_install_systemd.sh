@@ -139,8 +139,9 @@ journal_has() {
 start_or_abort() {
   in_box systemctl start swiveld.service >"$logs/$1.log" 2>&1 && return 0
   sleep 1
-  { in_box systemctl status --no-pager -n 0 swiveld.service
-    in_box journalctl -u swiveld.service --no-pager -n 15 -o cat; } >>"$logs/$1.log" 2>&1
+  # (systemctl status exits 3 for a unit that is not running.)
+  { in_box systemctl status --no-pager -n 0 swiveld.service || true
+    in_box journalctl -u swiveld.service --no-pager -n 15 -o cat || true; } >>"$logs/$1.log" 2>&1
   abort "$2" "$logs/$1.log"
 }
 # exposure: the overall exposure systemd-analyze security gives the loaded unit.
@@ -214,12 +215,12 @@ phase_done run
 
 # --- 4b. The DYNAMIXEL serial bus under the sandbox: the packaged daemon and plugin on two
 # servos that swivel-dxl-emulator (of the build, not packaged) answers for on a
-# pseudo-terminal, a runtime drop-in pointing ExecStart= at a configuration using it.
+# pseudo-terminal, a runtime drop-in pointing ExecStart= at a configuration using it. The
+# port is root:dialout 0660, as a USB serial adapter's.
 if [[ -n $dxl_emulator ]]; then
   echo "== the DYNAMIXEL bus: swiveld on emulated servos"
   install -m 755 "$dxl_emulator" "$root/srv/swivel-dxl-emulator"
-  # The pseudo-terminal belongs to the service's user, as a serial port its group may open.
-  in_box systemd-run --quiet --unit=swivel-dxl-emulator -p User=swivel -p RuntimeDirectory=swivel-dxl \
+  in_box systemd-run --quiet --unit=swivel-dxl-emulator -p RuntimeDirectory=swivel-dxl \
     /srv/swivel-dxl-emulator --ids 1,2 --link /run/swivel-dxl/port >"$logs/dxl-emulator.log" 2>&1 ||
     abort "systemd-run swivel-dxl-emulator" "$logs/dxl-emulator.log"
   for _ in $(seq 50); do in_box test -L /run/swivel-dxl/port && break; sleep 0.1; done
@@ -227,12 +228,16 @@ if [[ -n $dxl_emulator ]]; then
     in_box journalctl -u swivel-dxl-emulator.service --no-pager -n 10 >>"$logs/dxl-emulator.log" 2>&1
     abort "$dxl_emulator made no /run/swivel-dxl/port in the container" "$logs/dxl-emulator.log"
   fi
+  # As Debian gives a USB serial adapter: root's, read and written by the dialout group.
+  in_box sh -c 'chgrp dialout "$(readlink /run/swivel-dxl/port)" && chmod 660 "$(readlink /run/swivel-dxl/port)"'
+  # The longest reply timeout the plugin takes: the emulator is an ordinary process, late on
+  # a loaded machine, and the bus's timing is not what this checks.
   cat >"$root/etc/swivel/swiveld-dxl.yaml" <<'YAML'
 loop: {rate_hz: 500}
 robot_model: /etc/swivel/robots/docent.yaml
 hardware:
   plugin: dynamixel
-  params: {port: /run/swivel-dxl/port, reply_timeout_s: 0.2, stale_timeout_s: 1.0, left: {id: 1}, right: {id: 2, direction: -1}}
+  params: {port: /run/swivel-dxl/port, reply_timeout_s: 1.0, stale_timeout_s: 3.0, left: {id: 1}, right: {id: 2, direction: -1}}
 drivetrain: {plugin: differential, params: {max_wheel_rate_radps: 20.0}}
 localization: {plugin: raw_eg, params: {heading_source: encoders}}
 command: {timeout_s: 0.5, source: none}
