@@ -11,7 +11,10 @@ LineFit fit_line(const Point2* points, std::size_t count, bool x_of_y) noexcept 
   fit.x_of_y = x_of_y;
   if (points == nullptr || count < 2) return fit;
   const Point2 origin = points[0];
-  double su = 0.0, sv = 0.0, suu = 0.0, suv = 0.0;
+  double su = 0.0;
+  double sv = 0.0;
+  double suu = 0.0;
+  double suv = 0.0;
   for (std::size_t j = 0; j < count; ++j) {
     // u: the abscissa, v: the ordinate of the fitted form v = a u + b.
     const double dx = points[j].x_m - origin.x_m;
@@ -23,7 +26,7 @@ LineFit fit_line(const Point2* points, std::size_t count, bool x_of_y) noexcept 
     suu += u * u;
     suv += u * v;
   }
-  const double n = static_cast<double>(count);
+  const auto n = static_cast<double>(count);
   // Cramer's rule on [suu su; su n] [a; b] = [suv; sv].
   const double det = suu * n - su * su;
   if (!(std::abs(det) > 1e-12 * std::max(suu * n, 1e-300))) return fit;

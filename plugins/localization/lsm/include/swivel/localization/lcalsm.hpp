@@ -103,7 +103,7 @@ class Lcalsm {
   [[nodiscard]] Point2 point(std::size_t age) const noexcept;
 
  private:
-  std::size_t slot(std::size_t age) const noexcept {
+  [[nodiscard]] std::size_t slot(std::size_t age) const noexcept {
     return (head_ + kMaxWindowPoints - age) % kMaxWindowPoints;
   }
   void compensate_paper() noexcept;
