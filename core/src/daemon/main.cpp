@@ -3,6 +3,7 @@
 //   swiveld --config FILE [--check] [--log-level LEVEL] [--record LOG.csv [--record-rate-hz HZ]]
 // SIGTERM/SIGINT stop it, SIGHUP reloads the configuration.
 
+#include <malloc.h>
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -19,7 +20,15 @@
 
 namespace {
 
+// glibc's threshold for giving a block its own mapping: its default, made fixed.
+constexpr int kOwnMappingFromBytes = 128 * 1024;
+
 int run(int argc, char** argv) {
+  // Blocks this large (Cyclone DDS's 1 MiB receive buffers, replaced as they fill) always get
+  // a mapping of their own, returned when freed. By default glibc raises the threshold once
+  // such a block is freed, and the next ones come from a thread's arena, whose pages then stay
+  // resident (all of them under mlockall): a step of 1.1 MiB within 1,000 reloads.
+  mallopt(M_MMAP_THRESHOLD, kOwnMappingFromBytes);
   CLI::App app{"swiveld: the Swivel robot control daemon"};
   std::string config_file;
   bool check = false;
