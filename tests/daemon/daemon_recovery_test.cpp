@@ -309,7 +309,7 @@ TEST(DaemonSwap, RollsBackWhenTheIncomingPluginRefusesTheHandOver) {
 
 TEST(DaemonSwap, RollsBackWhenTheIncomingPluginThrowsFromTheHandOver) {
   expect_rollback("{plugin: refuses_hand_over, params: {throw: true}}",
-                  "plugin threw an exception on the real-time loop");
+                  "plugin threw std::runtime_error: planted exception in hand_over");
 }
 
 }  // namespace

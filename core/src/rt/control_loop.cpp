@@ -6,10 +6,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <numbers>
 #include <span>
 #include <stdexcept>
+#include <string_view>
 #include <system_error>
+#include <typeinfo>
+
+#include "swivel/rt/exception_text.hpp"
 
 namespace swivel::rt {
 namespace {
@@ -523,15 +528,23 @@ void ControlLoop::raise_transient_fault(FaultCode code, double now_s, const char
 
 // Plugins must not throw on the loop; one that does anyway is stopped at this boundary and
 // its exception becomes a fault with a controlled stop rather than std::terminate.
+// The fault keeps what was thrown ("plugin threw std::runtime_error: <what>"), written into
+// thrown_text_ without allocating.
 template <class Call>
 Status ControlLoop::guarded(Call&& call, const char*& thrown) noexcept {
   thrown = nullptr;
+  constexpr std::string_view kPrefix = "plugin threw ";
+  copy_text(kPrefix.data(), thrown_text_);
+  const std::span<char> rest = std::span(thrown_text_).subspan(kPrefix.size());
   try {
     return call();
+  } catch (const std::exception& e) {
+    describe_exception(&typeid(e), e.what(), rest);
   } catch (...) {
-    thrown = "plugin threw an exception on the real-time loop";
-    return Status::kError;
+    describe_exception(current_exception_type(), nullptr, rest);
   }
+  thrown = thrown_text_.data();
+  return Status::kError;
 }
 
 void ControlLoop::write_zero_setpoints() noexcept {

@@ -433,7 +433,7 @@ class ControlLoop {
   bool end_reading_gap(Localization& localization, const OdometryIncrement& measured,
                        double now_s) noexcept;
   template <class Call>
-  static Status guarded(Call&& call, const char*& thrown) noexcept;
+  Status guarded(Call&& call, const char*& thrown) noexcept;
   void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
                  double b = 0.0, double c = 0.0, double d = 0.0,
                  const char* detail = nullptr) noexcept;
@@ -529,6 +529,7 @@ class ControlLoop {
   SensorWatch motion_capture_watch_;
 
   // Non-real-time ownership.
+  std::array<char, sizeof(FaultDetail)> thrown_text_{};  ///< what a plugin last threw (guarded)
   ClockOffset clock_offset_;
   std::mutex clock_mutex_;
   std::condition_variable_any clock_wake_;
