@@ -14,7 +14,7 @@
 namespace swivel::plugins {
 namespace {
 
-const DifferentialParams kDocent{0.075, 0.075, 0.40};
+constexpr DifferentialParams kDocent{0.075, 0.075, 0.40};
 
 HardwareState reading(double stamp_s, double left_rad, double right_rad) {
   HardwareState s;
