@@ -7,7 +7,7 @@
 # (* and ? match any characters, "/" included); set SWIVEL_STATE_TOPICS, SWIVEL_COMMAND_TOPICS
 # or SWIVEL_SENSOR_TOPICS to override, or add patterns with SWIVEL_EXTRA_INPUT_TOPICS (e.g. a
 # motion-capture topic that does not end in /pose).
-: "${SWIVEL_STATE_TOPICS:=swivel_robot_state swivel_module_states swivel_diagnostics swivel_calibration_result swivel_reply swivel_run_samples rt/odom rt/*/odom rt/tf rt/diagnostics rt/joint_states rt/*/joint_states}"
+: "${SWIVEL_STATE_TOPICS:=swivel_robot_state swivel_module_states swivel_diagnostics swivel_calibration_result swivel_reply swivel_run_samples rt/odom rt/*/odom rt/tf rt/diagnostics rt/joint_states rt/*/joint_states ros_discovery_info}"
 : "${SWIVEL_COMMAND_TOPICS:=swivel_velocity_command swivel_motion_capture swivel_command swivel_set_pose rt/cmd_vel rt/*/cmd_vel rt/initialpose rt/*/initialpose}"
 # dds.ros2.imu (default "imu"; "imu/data" for an REP 145 driver) and dds.ros2.mocap_pose
 # (drivers name it <driver>/<rigid body>/pose: vrpn_mocap, mocap4r2, OptiTrack bridges).

@@ -25,7 +25,7 @@ std::string error_of(const std::string& yaml) {
 TEST(DdsOptions, DefaultsWhenAbsent) {
   const DdsOptions options = parse_dds_options(YAML::Node(), "swiveld.yaml", "/etc/swivel");
 
-  EXPECT_EQ(options.domain_id, 0u);
+  EXPECT_EQ(options.domain_id, 0U);
   EXPECT_EQ(options.config_uri, "");
   EXPECT_DOUBLE_EQ(options.publish_rate_hz, 100.0);
   EXPECT_DOUBLE_EQ(options.diagnostics_rate_hz, 2.0);
@@ -33,8 +33,14 @@ TEST(DdsOptions, DefaultsWhenAbsent) {
   EXPECT_DOUBLE_EQ(options.run_samples_rate_hz, 100.0);
   EXPECT_FALSE(options.ros2.enabled);
   EXPECT_TRUE(options.ros2.publish_tf);
-  EXPECT_FALSE(options.ros2.cmd_vel_stamped);
+  // TwistStamped: what Nav2 sends from Kilted on (the current LTS, Lyrical, included).
+  EXPECT_TRUE(options.ros2.cmd_vel_stamped);
   EXPECT_DOUBLE_EQ(options.ros2.cmd_vel_max_age_s, 0.5);
+  EXPECT_EQ(options.ros2.node_name, "swiveld");
+  EXPECT_EQ(options.ros2.node_namespace(), "/");
+  EXPECT_EQ(options.ros2.frame_prefix, "");
+  EXPECT_EQ(options.ros2.odom_frame(), "odom");
+  EXPECT_EQ(options.ros2.base_frame(), "base_link");
   EXPECT_TRUE(options.ros2.wheel_joints.empty());
   EXPECT_TRUE(options.ros2.steering_joints.empty());
 }
@@ -60,11 +66,12 @@ TEST(DdsOptions, ReadsEveryKey) {
       YAML::Load("{domain_id: 7, config: dds/loopback.xml, publish_rate_hz: 50,"
                  " diagnostics_rate_hz: 1, history_depth: 5,"
                  " ros2: {enabled: true, namespace: /robot1/, odom_frame_id: map,"
-                 " base_frame_id: base_footprint, publish_tf: false, cmd_vel_stamped: true,"
-                 " cmd_vel_max_age_s: 0.2, wheel_joints: [l, r]}}"),
+                 " base_frame_id: base_footprint, publish_tf: false, cmd_vel_stamped: false,"
+                 " cmd_vel_max_age_s: 0.2, wheel_joints: [l, r], node_name: base_driver,"
+                 " frame_prefix: robot1/}}"),
       "swiveld.yaml", source_dir + "/config");
 
-  EXPECT_EQ(options.domain_id, 7u);
+  EXPECT_EQ(options.domain_id, 7U);
   EXPECT_EQ(options.config_uri, "file://" + source_dir + "/config/dds/loopback.xml");
   EXPECT_DOUBLE_EQ(options.publish_rate_hz, 50.0);
   EXPECT_DOUBLE_EQ(options.diagnostics_rate_hz, 1.0);
@@ -75,8 +82,13 @@ TEST(DdsOptions, ReadsEveryKey) {
   EXPECT_EQ(options.ros2.odom_frame_id, "map");
   EXPECT_EQ(options.ros2.base_frame_id, "base_footprint");
   EXPECT_FALSE(options.ros2.publish_tf);
-  EXPECT_TRUE(options.ros2.cmd_vel_stamped);
+  EXPECT_FALSE(options.ros2.cmd_vel_stamped);
   EXPECT_DOUBLE_EQ(options.ros2.cmd_vel_max_age_s, 0.2);
+  EXPECT_EQ(options.ros2.node_name, "base_driver");
+  EXPECT_EQ(options.ros2.node_namespace(), "/robot1");
+  EXPECT_EQ(options.ros2.frame_prefix, "robot1/");
+  EXPECT_EQ(options.ros2.odom_frame(), "robot1/map");
+  EXPECT_EQ(options.ros2.base_frame(), "robot1/base_footprint");
   EXPECT_EQ(options.ros2.wheel_joints, (std::vector<std::string>{"l", "r"}));
 }
 
@@ -148,6 +160,27 @@ TEST(DdsOptions, RejectsABadRosNamespace) {
   EXPECT_NE(message.find("'robot 1'"), std::string::npos) << message;
 }
 
+TEST(DdsOptions, RejectsABadNodeName) {
+  EXPECT_NE(error_of("ros2: {node_name: ''}").find("dds.ros2.node_name"), std::string::npos);
+  for (const char* bad : {"'swiveld/left'", "'2nd'", "'my node'"}) {
+    const std::string message = error_of(std::string("ros2: {node_name: ") + bad + "}");
+    EXPECT_NE(message.find("dds.ros2.node_name"), std::string::npos) << message;
+    EXPECT_NE(message.find("expected a ROS 2 node name"), std::string::npos) << message;
+  }
+}
+
+TEST(DdsOptions, RejectsABadFramePrefix) {
+  for (const char* bad : {"/robot1/", "'robot 1/'", "/", "robot1//"}) {
+    const std::string message = error_of(std::string("ros2: {frame_prefix: ") + bad + "}");
+    EXPECT_NE(message.find("dds.ros2.frame_prefix"), std::string::npos) << bad << ": " << message;
+  }
+  const auto prefix = [](const char* yaml) {
+    return parse_dds_options(YAML::Load(yaml), "swiveld.yaml", "/etc/swivel").ros2.odom_frame();
+  };
+  EXPECT_EQ(prefix("{ros2: {frame_prefix: fleet/robot1/}}"), "fleet/robot1/odom");
+  EXPECT_EQ(prefix("{ros2: {frame_prefix: robot1_}}"), "robot1_odom");  // taken as written
+}
+
 // Sets or clears CYCLONEDDS_URI for one test and puts the old value back.
 class ScopedUri {
  public:
@@ -204,7 +237,7 @@ TEST(DdsConfigRule, LoopbackWhenNeitherIsGiven) {
   const ScopedUri uri(nullptr);
   const ResolvedConfig resolved = resolve_config();
 
-  EXPECT_EQ(resolved.uri.rfind("file://", 0), 0u) << resolved.uri;
+  EXPECT_EQ(resolved.uri.rfind("file://", 0), 0U) << resolved.uri;
   EXPECT_NE(resolved.uri.find("loopback.xml"), std::string::npos) << resolved.uri;
   EXPECT_EQ(tool_config_uri(), resolved.uri);
 }

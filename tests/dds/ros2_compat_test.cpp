@@ -63,7 +63,8 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   bridge.start();
 
   nav_msgs_msg_dds__Odometry_ odom{};
-  std::string frame, child_frame;
+  std::string frame;
+  std::string child_frame;
   ASSERT_TRUE(wait_for([&] {
     return take_one<nav_msgs_msg_dds__Odometry_>(reader, [&](const nav_msgs_msg_dds__Odometry_& o) {
       odom = o;
@@ -117,7 +118,7 @@ TEST(Ros2Compat, PublishesOdometryAsNavMsgsOnRtNamespaceOdom) {
   uint32_t representations = 0;
   dds_data_representation_id_t* values = nullptr;
   ASSERT_TRUE(dds_qget_data_representation(endpoint->qos, &representations, &values));
-  ASSERT_EQ(representations, 1u);
+  ASSERT_EQ(representations, 1U);
   EXPECT_EQ(values[0], DDS_DATA_REPRESENTATION_XCDR1);
   dds_free(values);
   dds_builtintopic_free_endpoint(endpoint);
@@ -127,7 +128,9 @@ TEST(Ros2Compat, AcceptsCmdVelTwistFromReliableAndBestEffortPublishers) {
   const std::string ns = unique_robot_id("swivel_test_cmd");
   std::mutex mutex;
   std::vector<VelocityCommand> received;
-  DdsBridge bridge(ros2_options(ns), "ros2_robot",
+  DdsOptions options = ros2_options(ns);
+  options.ros2.cmd_vel_stamped = false;  // Twist, as Nav2 on Jazzy sends by default
+  DdsBridge bridge(options, "ros2_robot",
                    {.read_state = [](StateSnapshot&) { return false; },
                     .on_command =
                         [&](const VelocityCommand& c) {
@@ -189,7 +192,8 @@ TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
   ASSERT_TRUE(wait_for([&] { return publication_matched(writer); }))
       << "the bridge's initialpose reader did not match within 10 s";
 
-  std::string map = "map", odom = "odom";
+  std::string map = "map";
+  std::string odom = "odom";
   geometry_msgs_msg_dds__PoseWithCovarianceStamped_ msg{};
   msg.header.frame_id = map.data();
   msg.pose.pose.position.x = 9.0;
@@ -213,7 +217,7 @@ TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
   })) << "no initialpose reached on_set_pose within 10 s";
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   const std::scoped_lock lock(mutex);
-  ASSERT_EQ(received.size(), 1u) << "the pose in frame 'map' was not ignored";
+  ASSERT_EQ(received.size(), 1U) << "the pose in frame 'map' was not ignored";
   const SetPoseSample& p = received[0];
   EXPECT_FALSE(p.wants_reply);
   EXPECT_EQ(p.source, "rt/" + ns + "/initialpose");
@@ -229,7 +233,10 @@ TEST(Ros2Compat, AcceptsInitialPoseInTheOdometryFrame) {
 
 TEST(Ros2Compat, QuaternionToYawInvertsYawToQuaternion) {
   for (const double yaw : {0.0, 0.5, -2.0, 3.1}) {
-    double x, y, z, w;
+    double x = 0.0;
+    double y = 0.0;
+    double z = 0.0;
+    double w = 0.0;
     yaw_to_quaternion(yaw, x, y, z, w);
     EXPECT_NEAR(quaternion_to_yaw(x, y, z, w), yaw, 1e-12);
   }

@@ -5,19 +5,23 @@
 #include <sys/wait.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "dds_test_util.hpp"
+#include "ros2_interfaces.h"
 #include "swivel/clock.hpp"
 #include "swivel/dds/bridge.hpp"
 #include "swivel/dds/run_sample_publisher.hpp"
+#include "swivel/dds/topics.hpp"
 #include "swivel/run_log.hpp"
 
 namespace swivel::dds {
@@ -29,7 +33,7 @@ struct RunResult {
   int exit_code = -1;
   std::string out;
   std::string err;
-  std::vector<std::string> lines() const {
+  [[nodiscard]] std::vector<std::string> lines() const {
     std::vector<std::string> result;
     std::istringstream in(out);
     for (std::string line; std::getline(in, line);) result.push_back(line);
@@ -59,8 +63,7 @@ RunResult swivelctl(const std::string& args) {
 // diagnostics and a reload counter.
 class FakeDaemon {
  public:
-  explicit FakeDaemon(const std::string& robot) {
-    DdsOptions options;
+  explicit FakeDaemon(const std::string& robot, DdsOptions options = {}) {
     options.diagnostics_rate_hz = 10.0;
     bridge_ = std::make_unique<DdsBridge>(
         options, robot,
@@ -146,7 +149,7 @@ TEST(Swivelctl, EchoPrintsStateAsJsonLines) {
 
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto lines = r.lines();
-  ASSERT_EQ(lines.size(), 3u) << r.out;
+  ASSERT_EQ(lines.size(), 3U) << r.out;
   double last_x = -1.0;
   for (const auto& line : lines) {
     const auto j = nlohmann::json::parse(line);
@@ -165,8 +168,8 @@ TEST(Swivelctl, EchoPrintsDiagnosticsLines) {
   const RunResult r = swivelctl("echo diagnostics --robot " + robot + " --count 1 --timeout 10");
 
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  ASSERT_EQ(r.lines().size(), 1u);
-  EXPECT_EQ(r.out.rfind(robot + " rate=1000.0/1000.0Hz", 0), 0u) << r.out;
+  ASSERT_EQ(r.lines().size(), 1U);
+  EXPECT_EQ(r.out.rfind(robot + " rate=1000.0/1000.0Hz", 0), 0U) << r.out;
   EXPECT_NE(r.out.find("plugins=sim/differential/raw_eg"), std::string::npos) << r.out;
 }
 
@@ -186,13 +189,15 @@ TEST(Swivelctl, DriveStreamsCommandsAndEndsWithAStop) {
   EXPECT_DOUBLE_EQ(commands.back().twist.vx_mps, 0.0);
   EXPECT_DOUBLE_EQ(commands.back().twist.wz_radps, 0.0);
   // 0.5 s at 20 Hz: about 10 commands plus the stop; a generous band, not a timing test.
-  EXPECT_GE(commands.size(), 3u);
-  EXPECT_LE(commands.size(), 13u);
+  EXPECT_GE(commands.size(), 3U);
+  EXPECT_LE(commands.size(), 13U);
 }
 
 TEST(Swivelctl, StatusListsEveryDaemonOfAFleet) {
   const std::string stem = unique_robot_id("fleet");
-  FakeDaemon a(stem + "_a"), b(stem + "_b"), c(stem + "_c");
+  const FakeDaemon a(stem + "_a");
+  const FakeDaemon b(stem + "_b");
+  const FakeDaemon c(stem + "_c");
 
   const RunResult r = swivelctl("status --json --timeout 10");
 
@@ -204,6 +209,41 @@ TEST(Swivelctl, StatusListsEveryDaemonOfAFleet) {
     EXPECT_EQ(j[id]["mode"], "velocity");
     EXPECT_EQ(j[id]["diagnostics"]["plugins"]["drivetrain"], "differential");
   }
+}
+
+// A Nav2 on Jazzy (Twist) against the default TwistStamped cmd_vel: the robot would not
+// move, and `swivelctl status` says why and what to set; the publish rate is in its row.
+TEST(Swivelctl, StatusNamesACmdVelPublisherOfTheOtherType) {
+  const std::string robot = unique_robot_id("mismatch");
+  DdsOptions options;
+  options.ros2.enabled = true;
+  options.ros2.ros_namespace = robot;
+  FakeDaemon daemon(robot, options);
+  Participant nav2({0, tool_config_uri()});
+  const dds_entity_t topic = create_topic(nav2.handle(), &geometry_msgs_msg_dds__Twist__desc,
+                                          ("rt/" + robot + "/cmd_vel").c_str());
+  const QosPtr qos = default_qos(10);
+  ASSERT_GT(dds_create_writer(nav2.handle(), topic, qos.get(), nullptr), 0);
+  const std::string warning =
+      "a Twist publisher on /" + robot + "/cmd_vel; set dds.ros2.cmd_vel_stamped: false";
+
+  RunResult table;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        table = swivelctl("status --timeout 10 --robot " + robot);
+        return table.out.find(warning) != std::string::npos;
+      },
+      std::chrono::seconds(30)))
+      << table.out << table.err;
+  EXPECT_NE(table.out.find("  " + robot + ": " + warning + "\n"), std::string::npos) << table.out;
+  EXPECT_NE(table.out.find("PUB_HZ"), std::string::npos) << table.out;
+  EXPECT_NE(table.out.find("/100 "), std::string::npos) << table.out;  // of dds.publish_rate_hz
+
+  const RunResult json = swivelctl("status --json --timeout 10 --robot " + robot);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const auto j = nlohmann::json::parse(json.out);
+  EXPECT_EQ(j[robot]["diagnostics"]["dds_warnings"], warning);
+  EXPECT_DOUBLE_EQ(j[robot]["diagnostics"]["publish_rate_hz"].get<double>(), 100.0);
 }
 
 TEST(Swivelctl, ReloadReportsTheDaemonsAnswer) {
@@ -243,7 +283,7 @@ TEST(Swivelctl, SetPoseSendsThePoseAndItsSigmas) {
   EXPECT_NE(bad.err.find("--sigma: standard deviations must be finite and >= 0"), std::string::npos)
       << bad.err;
   const auto poses = daemon.poses();
-  ASSERT_EQ(poses.size(), 2u);
+  ASSERT_EQ(poses.size(), 2U);
   EXPECT_EQ(poses[0].pose.pose.x_m, -1.5);
   EXPECT_EQ(poses[0].pose.pose.y_m, 2.0);
   EXPECT_EQ(poses[0].pose.pose.yaw_rad, -0.25);
@@ -303,26 +343,26 @@ TEST(Swivelctl, RecordWritesTheSamplesAndReportsGapsAndSkippedOnes) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto lines = r.lines();
   ASSERT_FALSE(lines.empty());
-  unsigned rows = 0;
-  unsigned gaps = 0;
-  unsigned missing = 0;
-  unsigned skipped = 0;
   const std::string& summary = lines.back();
-  const auto at = summary.find("to " + path + ": ");
-  ASSERT_EQ(std::sscanf(summary.c_str(), "recorded %u rows", &rows), 1) << summary;
-  ASSERT_NE(at, std::string::npos) << summary;
-  ASSERT_EQ(std::sscanf(summary.c_str() + at + path.size() + 5,
-                        "%u gaps (%u samples missing), %u skipped", &gaps, &missing, &skipped),
-            3)
+  ASSERT_NE(summary.find("to " + path + ": "), std::string::npos) << summary;
+  std::smatch counts;
+  ASSERT_TRUE(std::regex_search(
+      summary, counts,
+      std::regex(
+          R"(^recorded (\d+) rows .*: (\d+) gaps \((\d+) samples missing\), (\d+) skipped)")))
       << summary;
+  const unsigned long rows = std::stoul(counts[1].str());
+  const unsigned long gaps = std::stoul(counts[2].str());
+  const unsigned long missing = std::stoul(counts[3].str());
+  const unsigned long skipped = std::stoul(counts[4].str());
   // 2.5 s of stamps: 250 sequence numbers, each a row, a missing sample or a skipped one,
   // and up to 10 more when the sample that ends the recording comes right after a gap (its
   // missing predecessors are counted: some of them may belong to the window).
-  EXPECT_GE(gaps, 2u) << summary;
+  EXPECT_GE(gaps, 2U) << summary;
   EXPECT_EQ(missing, 10 * gaps) << summary;
-  EXPECT_GE(skipped, 2u) << summary;
-  EXPECT_GE(rows + missing + skipped, 249u) << summary;
-  EXPECT_LE(rows + missing + skipped, 261u) << summary;
+  EXPECT_GE(skipped, 2U) << summary;
+  EXPECT_GE(rows + missing + skipped, 249U) << summary;
+  EXPECT_LE(rows + missing + skipped, 261U) << summary;
 
   const RunLog log = read_run_log(path);
   EXPECT_EQ(log.header.robot, robot);

@@ -112,7 +112,10 @@ nlohmann::json to_json(const swivel_msg_Diagnostics& s) {
           {"reload_count", s.reload_count},
           {"last_reload_ok", s.last_reload_ok},
           {"last_reload_result", str(s.last_reload_result)},
-          {"restart_required", s.restart_required}};
+          {"restart_required", s.restart_required},
+          {"publish_rate_hz", s.publish_rate_hz},
+          {"achieved_publish_rate_hz", s.achieved_publish_rate_hz},
+          {"dds_warnings", str(s.dds_warnings)}};
 }
 
 nlohmann::json to_json(const swivel_msg_CalibrationResult& s) {
@@ -158,7 +161,7 @@ std::string to_line(const swivel_msg_Diagnostics& s) {
   return format(
       "%s rate=%.1f/%.1fHz lateness p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus "
       "cycle p50/p99/p99.9/max=%.1f/%.1f/%.1f/%.1fus overruns=%llu fault=%s%s%s%s faults=%llu "
-      "plugins=%s/%s/%s model=%s reloads=%u last_reload=%s%s",
+      "plugins=%s/%s/%s model=%s reloads=%u last_reload=%s%s publish=%.1f/%gHz%s%s",
       str(s.robot_id).c_str(), s.measured_rate_hz, s.loop_rate_hz, s.lateness.p50_us,
       s.lateness.p99_us, s.lateness.p999_us, s.lateness.max_us, s.cycle_time.p50_us,
       s.cycle_time.p99_us, s.cycle_time.p999_us, s.cycle_time.max_us,
@@ -168,7 +171,9 @@ std::string to_line(const swivel_msg_Diagnostics& s) {
       str(s.drivetrain_plugin).c_str(), str(s.localization_plugin).c_str(),
       str(s.robot_model).c_str(), s.reload_count,
       s.reload_count == 0 ? "-" : (s.last_reload_ok ? "ok" : "rejected"),
-      s.restart_required ? " (restart required)" : "");
+      s.restart_required ? " (restart required)" : "", s.achieved_publish_rate_hz,
+      s.publish_rate_hz,
+      str(s.dds_warnings).empty() ? "" : " warnings: ", str(s.dds_warnings).c_str());
 }
 
 std::string to_line(const swivel_msg_CalibrationResult& s) {

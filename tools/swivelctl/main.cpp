@@ -174,9 +174,9 @@ int run_status(const CommonOptions& common, bool json) {
   }
   nlohmann::json all = nlohmann::json::object();
   if (!json) {
-    std::printf("%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s  %s\n", "ROBOT", "MODE",
+    std::printf("%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s %13s  %s\n", "ROBOT", "MODE",
                 "LOCALIZATION", "FAULT", "PLUGINS", "RATE_HZ", "LATE_P99_US", "CYCLE_P99_US",
-                "OVERRUNS", "POSE (x m, y m, yaw rad)");
+                "OVERRUNS", "PUB_HZ", "POSE (x m, y m, yaw rad)");
   }
   for (const auto& [id, r] : robots) {
     nlohmann::json entry;
@@ -194,7 +194,7 @@ int run_status(const CommonOptions& common, bool json) {
     const nlohmann::json d = r.diagnostics.value_or(nlohmann::json::object());
     auto num = [&](const char* a, const char* b = nullptr) {
       if (!d.contains(a)) return std::string("-");
-      const auto& v = b ? d[a][b] : d[a];
+      const auto& v = b != nullptr ? d[a][b] : d[a];
       char text[32];
       std::snprintf(text, sizeof text, "%.1f", v.get<double>());
       return std::string(text);
@@ -206,13 +206,23 @@ int run_status(const CommonOptions& common, bool json) {
                                            std::to_string(r.state->y_m).substr(0, 7) + ", " +
                                            std::to_string(r.state->yaw_rad).substr(0, 7)
                                      : "-";
+    // States published per second against dds.publish_rate_hz, e.g. "859.2/1000".
+    const std::string publish =
+        d.contains("publish_rate_hz")
+            ? num("achieved_publish_rate_hz") + "/" +
+                  std::to_string(std::lround(d["publish_rate_hz"].get<double>()))
+            : "-";
     std::printf(
-        "%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s  %s\n", id.c_str(),
+        "%-16s %-10s %-14s %-20s %-18s %10s %12s %12s %9s %13s  %s\n", id.c_str(),
         r.state ? mode_name(r.state->mode) : "-", r.state ? r.localization.c_str() : "-",
         r.state ? r.fault.c_str() : "-", plugins.c_str(), num("measured_rate_hz").c_str(),
         num("lateness", "p99_us").c_str(), num("cycle_time", "p99_us").c_str(),
         d.contains("overruns") ? std::to_string(d["overruns"].get<std::uint64_t>()).c_str() : "-",
-        pose.c_str());
+        publish.c_str(), pose.c_str());
+    // What the daemon's DDS side found wrong (a cmd_vel publisher of the other type, a
+    // publish rate short of the configured one), on its own line under the robot's row.
+    const std::string warnings = d.value("dds_warnings", std::string());
+    if (!warnings.empty()) std::printf("  %s: %s\n", id.c_str(), warnings.c_str());
   }
   if (json) std::cout << all.dump() << '\n';
   return 0;
@@ -263,7 +273,10 @@ int run_set_pose(const PoseRequest& pose, const CommonOptions& common) {
 
 }  // namespace swivel::ctl
 
-int main(int argc, char** argv) {
+namespace {
+
+// The command line, parsed and run; main() catches what escapes the set-up.
+int run_command_line(int argc, char** argv) {
   using namespace swivel::ctl;
   CLI::App app{
       "swivelctl: talk to running swiveld daemons over DDS.\n"
@@ -293,7 +306,11 @@ int main(int argc, char** argv) {
   echo->add_flag("--json", json, "one JSON object per line");
   add_common(echo, true);
 
-  double vx = 0, vy = 0, wz = 0, for_s = 0, rate_hz = 20;
+  double vx = 0;
+  double vy = 0;
+  double wz = 0;
+  double for_s = 0;
+  double rate_hz = 20;
   CLI::App* drive = app.add_subcommand("drive", "send a body velocity command, then stop");
   drive->add_option("vx", vx, "forward velocity, m/s")->required();
   drive->add_option("vy", vy, "leftward velocity, m/s")->required();
@@ -374,4 +391,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   return swivel::cli::kUsageError;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run_command_line(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "swivelctl: " << e.what() << '\n';
+  } catch (...) {
+    std::cerr << "swivelctl: unknown error\n";
+  }
+  return 1;
 }

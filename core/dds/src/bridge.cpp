@@ -21,6 +21,9 @@
 #include "ros2_interfaces.h"
 #include "swivel.h"
 #include "swivel/clock.hpp"
+#include "swivel/dds/cmd_vel_type_check.hpp"
+#include "swivel/dds/publish_rate_meter.hpp"
+#include "swivel/dds/ros2_node.hpp"
 #include "swivel/dds/ros_covariance.hpp"
 #include "swivel/dds/topics.hpp"
 #include "swivel/rt/clock_offset.hpp"
@@ -88,8 +91,10 @@ double quaternion_to_yaw(double x, double y, double z, double w) noexcept {
 struct DdsBridge::Entities {
   // CYCLONEDDS_URI, then dds.config, then Swivel's loopback-only file (resolve_config()):
   // never Cyclone's defaults, which would send discovery out of every interface.
+  // With ROS 2 on, the participant's USER_DATA names its enclave as rmw_cyclonedds does.
   explicit Entities(const DdsOptions& options)
-      : participant({options.domain_id, resolve_config(options.config_uri).uri}) {}
+      : participant({options.domain_id, resolve_config(options.config_uri).uri},
+                    options.ros2.enabled ? kRos2ParticipantUserData : "") {}
 
   Participant participant;
   dds_entity_t state_writer = 0;
@@ -105,9 +110,10 @@ struct DdsBridge::Entities {
   dds_entity_t motion_capture_reader = 0;
   dds_entity_t request_reader = 0;
   dds_entity_t set_pose_reader = 0;
-  dds_entity_t cmd_vel_reader = 0;        ///< ROS 2, 0 when disabled
-  dds_entity_t initialpose_reader = 0;    ///< ROS 2, 0 when disabled
-  std::unique_ptr<SensorInputs> sensors;  ///< ROS 2 sensor topics, null when disabled
+  dds_entity_t cmd_vel_reader = 0;                 ///< ROS 2, 0 when disabled
+  dds_entity_t initialpose_reader = 0;             ///< ROS 2, 0 when disabled
+  std::unique_ptr<SensorInputs> sensors;           ///< ROS 2 sensor topics, null when disabled
+  std::unique_ptr<CmdVelTypeCheck> cmd_vel_check;  ///< ROS 2, null when disabled
   dds_entity_t waitset = 0;
 
   std::mutex wake_mutex;
@@ -122,7 +128,9 @@ struct DdsBridge::Entities {
 DdsBridge::DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks callbacks)
     : options_(std::move(options)),
       robot_id_(std::move(robot_id)),
-      callbacks_(std::move(callbacks)) {
+      callbacks_(std::move(callbacks)),
+      odom_frame_(options_.ros2.odom_frame()),
+      base_frame_(options_.ros2.base_frame()) {
   if (robot_id_.empty()) throw std::invalid_argument("DdsBridge: empty robot id");
   if (!callbacks_.read_state) throw std::invalid_argument("DdsBridge: read_state is required");
 
@@ -186,13 +194,17 @@ DdsBridge::DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks call
                                       options_.ros2.initialpose_topic(), reader_qos.get());
     dds_->sensors = std::make_unique<SensorInputs>(
         pp, options_.ros2, SensorCallbacks{callbacks_.on_gyro, callbacks_.on_pose_motion_capture});
+    dds_->cmd_vel_check = std::make_unique<CmdVelTypeCheck>(pp, options_.ros2.cmd_vel_topic(),
+                                                            options_.ros2.cmd_vel_stamped);
+    announce_node();
   }
 
   dds_->waitset = check(dds_create_waitset(pp), "dds_create_waitset");
   const auto sensors = dds_->sensors ? dds_->sensors->readers() : std::array<dds_entity_t, 2>{};
-  for (const dds_entity_t r : {dds_->command_reader, dds_->motion_capture_reader,
-                               dds_->request_reader, dds_->set_pose_reader, dds_->cmd_vel_reader,
-                               dds_->initialpose_reader, sensors[0], sensors[1]}) {
+  for (const dds_entity_t r :
+       {dds_->command_reader, dds_->motion_capture_reader, dds_->request_reader,
+        dds_->set_pose_reader, dds_->cmd_vel_reader, dds_->initialpose_reader, sensors[0],
+        sensors[1], dds_->cmd_vel_check ? dds_->cmd_vel_check->reader() : 0}) {
     if (r == 0) continue;
     const dds_entity_t condition =
         check(dds_create_readcondition(r, DDS_ANY_STATE), "dds_create_readcondition");
@@ -201,6 +213,23 @@ DdsBridge::DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks call
 }
 
 DdsBridge::~DdsBridge() { stop(); }
+
+void DdsBridge::announce_node() {
+  const auto sensors = dds_->sensors ? dds_->sensors->readers() : std::array<dds_entity_t, 2>{};
+  Ros2NodeEntities node{options_.ros2.node_namespace(),
+                        options_.ros2.node_name,
+                        {dds_->cmd_vel_reader, dds_->initialpose_reader, sensors[0], sensors[1]},
+                        {dds_->odom_writer, dds_->tf_writer, dds_->joint_states_writer,
+                         dds_->ros2_diagnostics_writer}};
+  try {
+    announce_ros2_node(dds_->participant.handle(), node);
+  } catch (const DdsError& e) {
+    // The topics work without it (DDS Security permissions may not grant the topic): ROS
+    // tools then list them under an unknown node.
+    spdlog::warn("dds: the ROS 2 node {}{}{} is not announced: {}", node.node_namespace,
+                 node.node_namespace == "/" ? "" : "/", node.node_name, e.what());
+  }
+}
 
 void DdsBridge::start() {
   if (publisher_.joinable() || subscriber_.joinable()) {
@@ -235,6 +264,7 @@ BridgeCounters DdsBridge::counters() const {
   c.motion_captures_received = motion_captures_received_.load();
   c.requests_received = requests_received_.load();
   c.replies_published = replies_published_.load();
+  c.achieved_publish_rate_hz = achieved_publish_rate_hz_.load();
   if (dds_->sensors) c.sensors = dds_->sensors->counters();
   return c;
 }
@@ -278,12 +308,15 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
   PublishClock::time_point due_at{};  // when it is due (epoch: any new cycle is)
   bool warned = false;
   StateSnapshot snapshot;
+  std::uint64_t newest_cycle = 0;  // the loop's, published or not
+  PublishRateMeter rate(options_.publish_rate_hz);
 
   // A new cycle (true) and whether it is the one due; the loop's wake-up jitter in the
   // stamps is tolerated up to 1 % of the publish period.
   const auto look = [&](bool& due) {
-    const bool fresh =
-        callbacks_.read_state(snapshot) && (!have_last || snapshot.cycle != last_cycle);
+    const bool have = callbacks_.read_state(snapshot);
+    if (have) newest_cycle = snapshot.cycle;
+    const bool fresh = have && (!have_last || snapshot.cycle != last_cycle);
     due = fresh && snapshot.stamp_s >= due_stamp_s - 0.01 * period_s;
     return fresh;
   };
@@ -318,6 +351,7 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
         // Nothing new for a while (a stalled or stopped loop): look once a period.
         next = now + period;
       }
+      measure_publish_rate(rate, newest_cycle);
       if (callbacks_.read_diagnostics && PublishClock::now() >= next_diagnostics) {
         publish_diagnostics(callbacks_.read_diagnostics());
         next_diagnostics += diagnostics_period;
@@ -332,6 +366,36 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
     if (callbacks_.read_diagnostics && next_diagnostics < next) next = next_diagnostics;
     dds_->wake.wait_until(lock, stop, next, [] { return false; });
   }
+}
+
+void DdsBridge::measure_publish_rate(PublishRateMeter& rate, std::uint64_t newest_cycle) {
+  const auto change = rate.update(monotonic_s(), states_published_.load(), newest_cycle);
+  achieved_publish_rate_hz_.store(rate.achieved_hz());
+  attainable_publish_rate_hz_.store(rate.attainable_hz());
+  publish_rate_short_.store(rate.short_of_rate());
+  if (change == PublishRateMeter::Change::kFellShort) {
+    spdlog::warn(
+        "dds: published {:.1f} states/s, below dds.publish_rate_hz {:g}{}: subscribers get "
+        "fewer samples than configured (diagnostics: achieved_publish_rate_hz)",
+        rate.achieved_hz(), options_.publish_rate_hz,
+        rate.attainable_hz() < options_.publish_rate_hz
+            ? fmt::format(" and the loop's {:.1f} cycles/s", rate.attainable_hz())
+            : std::string());
+  } else if (change == PublishRateMeter::Change::kRecovered) {
+    spdlog::info("dds: publishing at {:.1f} states/s again (dds.publish_rate_hz {:g})",
+                 rate.achieved_hz(), options_.publish_rate_hz);
+  }
+}
+
+std::string DdsBridge::dds_warnings() const {
+  std::string text = dds_->cmd_vel_check ? dds_->cmd_vel_check->warning() : std::string();
+  if (publish_rate_short_.load()) {
+    if (!text.empty()) text += "; ";
+    text += fmt::format("states published at {:.1f} Hz of {:.1f} Hz attainable ",
+                        achieved_publish_rate_hz_.load(), attainable_publish_rate_hz_.load()) +
+            fmt::format("(dds.publish_rate_hz: {:g})", options_.publish_rate_hz);
+  }
+  return text;
 }
 
 void DdsBridge::publish_state(const StateSnapshot& s) {
@@ -402,8 +466,8 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
     nav_msgs_msg_dds__Odometry_ odom{};
     odom.header.stamp.sec = ros_stamp.sec;
     odom.header.stamp.nanosec = ros_stamp.nanosec;
-    odom.header.frame_id = c_str(options_.ros2.odom_frame_id);
-    odom.child_frame_id = c_str(options_.ros2.base_frame_id);
+    odom.header.frame_id = c_str(odom_frame_);
+    odom.child_frame_id = c_str(base_frame_);
     odom.pose.pose.position.x = s.estimate.pose.x_m;
     odom.pose.pose.position.y = s.estimate.pose.y_m;
     auto& q = odom.pose.pose.orientation;
@@ -422,8 +486,8 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
     geometry_msgs_msg_dds__TransformStamped_ transform{};
     transform.header.stamp.sec = ros_stamp.sec;
     transform.header.stamp.nanosec = ros_stamp.nanosec;
-    transform.header.frame_id = c_str(options_.ros2.odom_frame_id);
-    transform.child_frame_id = c_str(options_.ros2.base_frame_id);
+    transform.header.frame_id = c_str(odom_frame_);
+    transform.child_frame_id = c_str(base_frame_);
     transform.transform.translation.x = s.estimate.pose.x_m;
     transform.transform.translation.y = s.estimate.pose.y_m;
     auto& q = transform.transform.rotation;
@@ -493,14 +557,19 @@ void DdsBridge::publish_diagnostics(const DiagnosticsSample& d) {
   msg.last_reload_ok = d.last_reload_ok;
   msg.last_reload_result = c_str(d.last_reload_result);
   msg.restart_required = d.restart_required;
+  msg.publish_rate_hz = options_.publish_rate_hz;
+  msg.achieved_publish_rate_hz = achieved_publish_rate_hz_.load();
+  const std::string warnings = dds_warnings();
+  msg.dds_warnings = c_str(warnings);
   check(dds_write(dds_->diagnostics_writer, &msg), "dds_write(diagnostics)");
-  if (dds_->ros2_diagnostics_writer != 0) publish_ros2_diagnostics(d);
+  if (dds_->ros2_diagnostics_writer != 0) publish_ros2_diagnostics(d, warnings);
 }
 
 // One DiagnosticStatus for the robot: ERROR while the loop holds it in a safe stop, WARN for
 // a transient fault (a command timeout, a rejected command) or a configuration that did not
 // apply, OK otherwise; the values are Diagnostics' fields as text.
-void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
+void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d,
+                                         const std::string& dds_warnings) {
   constexpr std::uint8_t kOk = 0;
   constexpr std::uint8_t kWarn = 1;
   constexpr std::uint8_t kError = 2;
@@ -508,7 +577,8 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
   std::string message = "running";
   if (d.mode == LoopMode::kSafeStop) {
     level = kError;
-  } else if (d.fault != FaultCode::kNone || !d.last_reload_ok || d.restart_required) {
+  } else if (d.fault != FaultCode::kNone || !d.last_reload_ok || d.restart_required ||
+             !dds_warnings.empty()) {
     level = kWarn;
   }
   if (d.fault != FaultCode::kNone) {
@@ -519,6 +589,8 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
     message = "running; last reload rejected";
   } else if (d.restart_required) {
     message = "running; a changed setting needs a restart";
+  } else if (!dds_warnings.empty()) {
+    message = "running; " + dds_warnings;
   }
   const char* mode = d.mode == LoopMode::kIdle          ? "idle"
                      : d.mode == LoopMode::kVelocity    ? "velocity"
@@ -547,7 +619,12 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d) {
       {"commands_stale", std::to_string(commands_stale_.load(std::memory_order_relaxed))},
       {"reload_count", std::to_string(d.reload_count)},
       {"last_reload", d.last_reload_result},
-      {"restart_required", d.restart_required ? "true" : "false"}};
+      {"restart_required", d.restart_required ? "true" : "false"},
+      {"publish_rate_hz", fmt::format("{:g}", options_.publish_rate_hz)},
+      {"achieved_publish_rate_hz", fmt::format("{:.1f}", achieved_publish_rate_hz_.load())},
+      {"cmd_vel_type", options_.ros2.cmd_vel_stamped ? "geometry_msgs/msg/TwistStamped"
+                                                     : "geometry_msgs/msg/Twist"},
+      {"dds_warnings", dds_warnings}};
   if (dds_->sensors) {
     // The ROS 2 sensor topics' samples: a driver whose samples are all rejected shows here
     // before its silence stops the robot.
@@ -645,6 +722,7 @@ void DdsBridge::subscribe_loop(const std::stop_token& stop) {
       take_set_poses();
       take_ros2_initialposes();
       if (dds_->sensors) dds_->sensors->take();
+      if (dds_->cmd_vel_check) dds_->cmd_vel_check->take();
     } catch (const std::exception& e) {
       spdlog::warn("dds: command handling failed: {}", e.what());
     }
@@ -766,9 +844,9 @@ void DdsBridge::take_ros2_initialposes() {
       dds_->initialpose_reader, [this](const geometry_msgs_msg_dds__PoseWithCovarianceStamped_& m) {
         requests_received_.fetch_add(1, std::memory_order_relaxed);
         const std::string frame = m.header.frame_id != nullptr ? m.header.frame_id : "";
-        if (!frame.empty() && frame != options_.ros2.odom_frame_id) {
+        if (!frame.empty() && frame != odom_frame_) {
           spdlog::warn("{}: pose in frame '{}' ignored: swiveld estimates the pose in '{}'",
-                       options_.ros2.initialpose_topic(), frame, options_.ros2.odom_frame_id);
+                       options_.ros2.initialpose_topic(), frame, odom_frame_);
           return;
         }
         if (!callbacks_.on_set_pose) return;

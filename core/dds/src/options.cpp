@@ -96,9 +96,9 @@ std::string Ros2Options::joint_states_topic() const {
   return ros2_topic(ros_namespace, "joint_states");
 }
 
-std::string Ros2Options::tf_topic() const { return "rt/tf"; }
+std::string Ros2Options::tf_topic() { return "rt/tf"; }
 
-std::string Ros2Options::diagnostics_topic() const { return "rt/diagnostics"; }
+std::string Ros2Options::diagnostics_topic() { return "rt/diagnostics"; }
 
 DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                              const std::string& config_dir) {
@@ -143,10 +143,29 @@ DdsOptions parse_dds_options(const YAML::Node& node, const std::string& file,
                                ros_namespace + "'");
   }
   options.ros2.ros_namespace = ros_namespace;
+  options.ros2.node_name = ros2.string_or("node_name", "swiveld");
+  if (!valid_ros_name(options.ros2.node_name) ||
+      options.ros2.node_name.find('/') != std::string::npos || options.ros2.node_name.empty()) {
+    ros2.fail("node_name",
+              "expected a ROS 2 node name (letters, digits, '_'; not starting with a digit), "
+              "got '" +
+                  options.ros2.node_name + "'");
+  }
   options.ros2.odom_frame_id = ros2.string_or("odom_frame_id", "odom");
   options.ros2.base_frame_id = ros2.string_or("base_frame_id", "base_link");
+  options.ros2.frame_prefix = ros2.string_or("frame_prefix", "");
+  // tf2 frame ids carry no leading '/'; the prefix is a ROS name, usually ending in '/'.
+  const std::string& prefix = options.ros2.frame_prefix;
+  const std::string bare_prefix =
+      !prefix.empty() && prefix.back() == '/' ? prefix.substr(0, prefix.size() - 1) : prefix;
+  if ((!prefix.empty() && bare_prefix.empty()) || !valid_ros_name(bare_prefix)) {
+    ros2.fail("frame_prefix",
+              "expected a frame prefix such as 'robot1/' (letters, digits, '_', '/'; no "
+              "leading '/'), got '" +
+                  prefix + "'");
+  }
   options.ros2.publish_tf = ros2.boolean_or("publish_tf", true);
-  options.ros2.cmd_vel_stamped = ros2.boolean_or("cmd_vel_stamped", false);
+  options.ros2.cmd_vel_stamped = ros2.boolean_or("cmd_vel_stamped", true);
   options.ros2.cmd_vel_max_age_s = ros2.number_or("cmd_vel_max_age_s", 0.5, 0.001, 60.0);
   const auto names = [&](const char* key, std::vector<std::string>& out) {
     const YAML::Node list = ros2.sequence(key);

@@ -145,9 +145,9 @@ std::string read_file(const std::string& path) {
 // The file: paths in the element texts of a Cyclone configuration: with DDS Security, the
 // certificates, the key, the governance and the permissions.
 std::vector<std::string> referenced_files(const std::string& xml) {
-  static const std::regex kFileRef(R"(>\s*file:([^<\s]+)\s*<)");
+  static const std::regex file_reference(R"(>\s*file:([^<\s]+)\s*<)");
   std::vector<std::string> files;
-  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), kFileRef);
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), file_reference);
        it != std::sregex_iterator(); ++it) {
     files.push_back((*it)[1].str());
   }
@@ -165,7 +165,7 @@ std::string unreadable_files(const std::string& config_uri) {
   std::string causes;
   for (const std::string& path : referenced_files(read_file(file))) {
     if (std::string bad = unreadable(path); !bad.empty()) {
-      causes += "; cannot read " + bad + ", named by " + file;
+      causes.append("; cannot read ").append(bad).append(", named by ").append(file);
     }
   }
   return causes;
@@ -190,14 +190,14 @@ constexpr int kExpiryWarningDays = 30;
 void warn_if_expiring(const std::string& config_uri) {
   const std::string file = config_file(config_uri);
   if (file.empty() || !unreadable(file).empty()) return;
-  static const std::regex kPermissions(R"(<Permissions>\s*file:([^<\s]+)\s*</Permissions>)");
-  static const std::regex kNotAfter(R"(<not_after>\s*([0-9T:-]+)\s*</not_after>)");
+  static const std::regex permissions_element(R"(<Permissions>\s*file:([^<\s]+)\s*</Permissions>)");
+  static const std::regex not_after_element(R"(<not_after>\s*([0-9T:-]+)\s*</not_after>)");
   const std::string xml = read_file(file);
   std::smatch permissions;
-  if (!std::regex_search(xml, permissions, kPermissions)) return;
+  if (!std::regex_search(xml, permissions, permissions_element)) return;
   const std::string document = read_file(permissions[1].str());
   std::smatch not_after;
-  if (!std::regex_search(document, not_after, kNotAfter)) return;
+  if (!std::regex_search(document, not_after, not_after_element)) return;
   std::tm tm{};
   if (::strptime(not_after[1].str().c_str(), "%Y-%m-%dT%H:%M:%S", &tm) == nullptr) return;
   const auto expires = std::chrono::system_clock::from_time_t(::timegm(&tm));
@@ -249,7 +249,7 @@ bool uses_dds_security(const std::string& config_uri) {
   return !file.empty() && read_file(file).find("<Security>") != std::string::npos;
 }
 
-Participant::Participant(const ParticipantOptions& options) {
+Participant::Participant(const ParticipantOptions& options, const std::string& user_data) {
   install_cyclone_log_sink();
   if (options.domain_id > kMaxSecureDomainId && uses_dds_security(options.config_uri)) {
     throw DdsError("domain " + std::to_string(options.domain_id) +
@@ -264,7 +264,9 @@ Participant::Participant(const ParticipantOptions& options) {
   } catch (const DdsError& e) {
     throw DdsError(e.what() + errors.suffix() + unreadable_files(options.config_uri));
   }
-  const dds_entity_t handle = dds_create_participant(options.domain_id, nullptr, nullptr);
+  QosPtr qos(dds_create_qos());
+  if (!user_data.empty()) dds_qset_userdata(qos.get(), user_data.data(), user_data.size());
+  const dds_entity_t handle = dds_create_participant(options.domain_id, qos.get(), nullptr);
   if (handle < 0) {
     throw DdsError(std::string("dds_create_participant(domain ") +
                    std::to_string(options.domain_id) + "): " + dds_strretcode(handle) +

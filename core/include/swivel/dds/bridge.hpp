@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "swivel/dds/options.hpp"
+#include "swivel/dds/publish_rate_meter.hpp"
 #include "swivel/dds/sensor_inputs.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/types.hpp"
@@ -132,6 +133,8 @@ struct BridgeCounters {
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;  ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
+  /// RobotStates written per second over the publisher's last window (PublishRateMeter).
+  double achieved_publish_rate_hz = 0.0;
   SensorCounters sensors;  ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
 };
 
@@ -163,6 +166,10 @@ class DdsBridge {
   void publish_reply(const ReplySample& reply);
 
   [[nodiscard]] BridgeCounters counters() const;
+  /// What the bridge found wrong, "; "-separated, "" when nothing: a cmd_vel publisher of the
+  /// other type (CmdVelTypeCheck), states published short of the attainable rate. Published
+  /// in Diagnostics.dds_warnings and the ROS 2 diagnostics.
+  [[nodiscard]] std::string dds_warnings() const;
   [[nodiscard]] const std::string& robot_id() const { return robot_id_; }
   /// The bridge's participant, for other writers of the daemon (RunSamplePublisher); valid
   /// while the bridge lives.
@@ -177,7 +184,9 @@ class DdsBridge {
   void publish_state(const StateSnapshot& snapshot);
   void publish_diagnostics(const DiagnosticsSample& sample);
   void publish_ros2_state(const StateSnapshot& snapshot);
-  void publish_ros2_diagnostics(const DiagnosticsSample& sample);
+  void publish_ros2_diagnostics(const DiagnosticsSample& sample, const std::string& dds_warnings);
+  void measure_publish_rate(PublishRateMeter& rate, std::uint64_t newest_cycle);
+  void announce_node();
   void take_commands();
   void take_ros2_commands();
   void take_motion_capture();
@@ -189,6 +198,8 @@ class DdsBridge {
   DdsOptions options_;
   std::string robot_id_;
   DdsCallbacks callbacks_;
+  std::string odom_frame_;  ///< frame_prefix + odom_frame_id
+  std::string base_frame_;  ///< frame_prefix + base_frame_id
   std::unique_ptr<Entities> dds_;
   std::jthread publisher_;
   std::jthread subscriber_;
@@ -201,8 +212,11 @@ class DdsBridge {
   std::atomic<std::uint64_t> motion_captures_received_{0};
   std::atomic<std::uint64_t> requests_received_{0};
   std::atomic<std::uint64_t> replies_published_{0};
-  std::uint64_t next_command_sequence_ = 0;  ///< subscriber thread only
-  bool warned_zero_stamp_ = false;           ///< subscriber thread only
+  std::atomic<double> achieved_publish_rate_hz_{0.0};    ///< written by the publisher thread
+  std::atomic<double> attainable_publish_rate_hz_{0.0};  ///< written by the publisher thread
+  std::atomic<bool> publish_rate_short_{false};          ///< written by the publisher thread
+  std::uint64_t next_command_sequence_ = 0;              ///< subscriber thread only
+  bool warned_zero_stamp_ = false;                       ///< subscriber thread only
 };
 
 /// Fills a ROS 2 style quaternion (x, y, z, w) for a rotation of `yaw_rad` about z.

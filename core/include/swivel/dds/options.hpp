@@ -38,18 +38,26 @@ inline constexpr double kDefaultMaxAgePeriods = 5.0;
 /// ROS 2 compatibility (README "ROS 2 tools without a bridge"): odometry as
 /// nav_msgs/Odometry on rt/<namespace>/odom, the odom -> base transform on rt/tf, joint
 /// states on rt/<namespace>/joint_states, diagnostic_msgs/DiagnosticArray on rt/diagnostics,
-/// geometry_msgs/Twist (or TwistStamped) commands from rt/<namespace>/cmd_vel and
-/// geometry_msgs/PoseWithCovarianceStamped poses from rt/<namespace>/initialpose.
+/// geometry_msgs/TwistStamped (or Twist) commands from rt/<namespace>/cmd_vel and
+/// geometry_msgs/PoseWithCovarianceStamped poses from rt/<namespace>/initialpose, all of
+/// them announced as the endpoints of one ROS 2 node (ros_discovery_info).
 struct Ros2Options {
   bool enabled = false;
   std::string ros_namespace;                ///< "" or e.g. "robot1" (no leading/trailing '/')
+  std::string node_name = "swiveld";        ///< the ROS 2 node ROS tools list
   std::string odom_frame_id = "odom";       ///< header.frame_id of the odometry
   std::string base_frame_id = "base_link";  ///< child_frame_id of the odometry
+  /// Put before odom_frame_id and base_frame_id wherever they go out or are checked, as
+  /// robot_state_publisher's frame_prefix does for the URDF's links: "robot1/" gives
+  /// robot1/odom and robot1/base_link. "" (default): none.
+  std::string frame_prefix;
   /// Publish odom_frame_id -> base_frame_id on rt/tf (off when another node, e.g.
   /// robot_localization, publishes that transform).
   bool publish_tf = true;
-  /// rt/cmd_vel carries geometry_msgs/TwistStamped instead of Twist.
-  bool cmd_vel_stamped = false;
+  /// rt/cmd_vel carries geometry_msgs/TwistStamped (true: what Nav2 sends from Kilted on,
+  /// Lyrical included, and ros2_controllers' diff_drive_controller takes since Jazzy) or
+  /// geometry_msgs/Twist (false: Nav2 on Jazzy unless enable_stamped_cmd_vel is set).
+  bool cmd_vel_stamped = true;
   /// TwistStamped commands whose stamp (ROS time) is further than this from the host's
   /// realtime clock, s, are dropped as stale (a zero stamp counts as "now").
   double cmd_vel_max_age_s = 0.5;
@@ -66,6 +74,12 @@ struct Ros2Options {
   /// dds.ros2.mocap_pose: motion capture from a ROS 2 driver (geometry_msgs/PoseStamped).
   Ros2SensorTopic mocap_pose;
 
+  /// frame_prefix + odom_frame_id: the odometry's frame on the wire.
+  [[nodiscard]] std::string odom_frame() const { return frame_prefix + odom_frame_id; }
+  /// frame_prefix + base_frame_id: the robot's frame on the wire.
+  [[nodiscard]] std::string base_frame() const { return frame_prefix + base_frame_id; }
+  /// The node's ROS 2 namespace: "/" or "/<namespace>".
+  [[nodiscard]] std::string node_namespace() const { return "/" + ros_namespace; }
   /// "rt/odom" or "rt/<namespace>/odom".
   [[nodiscard]] std::string odom_topic() const;
   /// "rt/cmd_vel" or "rt/<namespace>/cmd_vel".
@@ -75,9 +89,9 @@ struct Ros2Options {
   /// "rt/joint_states" or "rt/<namespace>/joint_states".
   [[nodiscard]] std::string joint_states_topic() const;
   /// "rt/tf": ROS 2's /tf is absolute (frame ids, not namespaces, tell robots apart).
-  [[nodiscard]] std::string tf_topic() const;
+  [[nodiscard]] static std::string tf_topic();
   /// "rt/diagnostics": absolute like ROS 2's /diagnostics (hardware_id names the robot).
-  [[nodiscard]] std::string diagnostics_topic() const;
+  [[nodiscard]] static std::string diagnostics_topic();
 };
 
 struct DdsOptions {

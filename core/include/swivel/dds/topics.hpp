@@ -24,6 +24,8 @@ inline constexpr const char* kRequestTopic = "swivel_command";
 inline constexpr const char* kSetPoseTopic = "swivel_set_pose";
 inline constexpr const char* kReplyTopic = "swivel_reply";
 inline constexpr const char* kRunSamplesTopic = "swivel_run_samples";
+/// ROS 2's graph announcements (no "rt/" prefix), written with dds.ros2 enabled (ros2_node.hpp).
+inline constexpr const char* kRosDiscoveryInfoTopic = "ros_discovery_info";
 
 /// Keep-last depth of swivel_run_samples on both ends: 20 s at the default 100 Hz, so that a
 /// recorder that stalls that long still gets every sample.
@@ -68,8 +70,9 @@ struct ParticipantOptions {
 /// A DDS domain participant, deleted (with every entity under it) on destruction.
 class Participant {
  public:
-  /// @throws DdsError when the domain or the participant cannot be created.
-  explicit Participant(const ParticipantOptions& options);
+  /// `user_data`: the participant's USER_DATA QoS ("" for none; ROS 2 reads "enclave=/;"
+  /// there). @throws DdsError when the domain or the participant cannot be created.
+  explicit Participant(const ParticipantOptions& options, const std::string& user_data = "");
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
