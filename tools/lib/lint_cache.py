@@ -8,7 +8,8 @@ project file the source includes, directly or not (generated headers of the buil
 too). Edit any of them and the key changes, so the source is linted again. The record has a
 line "PATH KEY RESULT" per source and key (the last few keys of a source are kept, so that
 the record holds the committed content and another one being worked on), RESULT one of
-  clean       this exact input was linted clean
+  clean       this exact input was linted clean (no finding but those listed in
+              tools/lint-known-findings.txt)
   findings    this exact input had findings when the record began: known, listed by every
               lint run, to be fixed
   unlinted    this exact input was not linted when the record began: listed by every lint
