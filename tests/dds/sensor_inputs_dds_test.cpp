@@ -183,9 +183,10 @@ TEST(SensorInputsDds, RotatedMountingGivesTheBodyYawRateFromAReliablePublisher) 
   check_gyro_follows(true, {std::numbers::pi, pitch, std::numbers::pi / 2}, wx, wy, wz, expected);
 }
 
-// A figure, printed: from an IMU sample's dds_write to the loop's first cycle that uses it
-// (the loop's snapshot shows the sample's distinct rate), at 100 Hz over loopback.
-TEST(SensorInputsDds, ImuSampleToLoopLatency) {
+// From an IMU sample's dds_write to the loop: at 100 Hz over loopback every sample reaches
+// the loop, in the order written (the loop's snapshot shows each sample's distinct rate). The
+// time each took is printed as a figure, not bounded: timing targets belong in benchmarks.
+TEST(SensorInputsDds, EveryImuSampleReachesTheLoopInOrder) {
   const std::string ns = unique_robot_id("imu_latency");
   const DdsOptions options = imu_options(ns, {0.0, 0.0, 0.0}, 10.0);
   LiveDaemon daemon(ns, options);
@@ -198,25 +199,40 @@ TEST(SensorInputsDds, ImuSampleToLoopLatency) {
     return daemon.loop->latest().gyro_wz_radps == 0.001;
   })) << "the IMU never reached the loop";
 
+  constexpr int kSamples = 200;
   std::vector<double> latency_us;
-  for (int i = 1; i <= 200; ++i) {
+  int reached = 0;
+  int out_of_order = 0;  // the loop showed an older sample after this one was written
+  double newest_seen = 0.001;
+  for (int i = 1; i <= kSamples; ++i) {
     const double value = 0.001 * i + 0.5;
     const auto sent = std::chrono::steady_clock::now();
     imu.write(0.0, 0.0, value);
-    while (daemon.loop->latest().gyro_wz_radps != value &&
-           std::chrono::steady_clock::now() - sent < 1s) {
+    StateSnapshot seen = daemon.loop->latest();
+    // A liveness limit only: a sample lost for good fails the count below, not a timing.
+    while (seen.gyro_wz_radps != value && std::chrono::steady_clock::now() - sent < 5s) {
+      if (seen.gyro_wz_radps > 0.5 && seen.gyro_wz_radps < newest_seen) ++out_of_order;
       std::this_thread::sleep_for(20us);
+      seen = daemon.loop->latest();
     }
-    const auto took = std::chrono::steady_clock::now() - sent;
-    ASSERT_LT(took, 1s) << "sample " << i << " did not reach the loop within 1 s";
-    latency_us.push_back(std::chrono::duration<double, std::micro>(took).count());
+    if (seen.gyro_wz_radps != value) continue;
+    ++reached;
+    newest_seen = value;
+    latency_us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent).count());
     std::this_thread::sleep_for(10ms);
   }
+  EXPECT_EQ(reached, kSamples) << "samples lost on the way to the loop";
+  EXPECT_EQ(out_of_order, 0) << "the loop went back to an older sample";
+  ASSERT_FALSE(latency_us.empty());
   std::sort(latency_us.begin(), latency_us.end());
+  const auto at = [&](double q) {
+    return latency_us[static_cast<std::size_t>(q * static_cast<double>(latency_us.size() - 1))];
+  };
   std::printf(
-      "IMU dds_write -> loop cycle using it, 200 samples at 100 Hz: median %.0f us, "
+      "IMU dds_write -> loop cycle using it, %zu samples at 100 Hz: median %.0f us, "
       "p95 %.0f us, max %.0f us (1 kHz loop)\n",
-      latency_us[100], latency_us[190], latency_us.back());
+      latency_us.size(), at(0.5), at(0.95), latency_us.back());
 }
 
 TEST(SensorInputsDds, PoseStampedMotionCaptureReachesTheLocalization) {
