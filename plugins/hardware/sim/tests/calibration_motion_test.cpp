@@ -36,7 +36,7 @@ RobotModel perturbed_truth() {
 class CalibrationMotionTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(CalibrationMotionTest, RobotTurnsAboutTheLockedContactAndCastersSelfAlign) {
-  const std::size_t locked = static_cast<std::size_t>(GetParam());
+  const auto locked = static_cast<std::size_t>(GetParam());
   const RobotModel nominal = swpc4();
   const RobotModel truth = perturbed_truth();
   const CalibrationMotion motion{locked, 45.0 * std::numbers::pi / 180.0, 0.3};
