@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "swivel/pose_math.hpp"
+
 namespace swivel::calibration {
 
 SimulatedCalibration run_simulated_calibration(const RobotModel& nominal, const RobotModel& truth,
@@ -39,6 +41,16 @@ SimulatedCalibration run_simulated_calibration(const RobotModel& nominal, const 
   while (!procedure.finished()) {
     world.read(reading);
     reading.stamp_s = static_cast<double>(cycle) * dt_s;  // the loop's clock
+    // Up or down by the seventh of the cycle count: irregular at any sampling rate.
+    const double flicker =
+        (cycle / 7) % 2 == 0 ? options.steering_flicker_rad : -options.steering_flicker_rad;
+    for (double& a : reading.steer_angle_rad) {
+      a += flicker;
+      if (options.wrap_steering) {
+        const double c = options.steering_wrap_center_rad;
+        a = c + wrap_pi(a - c);
+      }
+    }
     if (procedure.step(reading, command) != Status::kOk) {
       throw std::runtime_error(std::string("simulated calibration: ") + procedure.last_error());
     }

@@ -5,10 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "swivel/calibration/monte_carlo.hpp"
 
@@ -101,6 +103,47 @@ TEST(SimulatedProcedureTest, NoiseFreeSensorsRecoverTheTrueParameters) {
   EXPECT_LT(e.d_m, 1e-6);
   // Torque-driven wheels roll as the rotation asks: every radius is observable in one pass.
   EXPECT_LT(e.r_m, 1e-6);
+}
+
+// A steering encoder that wraps where a locked module sits and flickers by a count there: its
+// readings flip between the two ends of its range. The procedure unwraps them as a log's reader
+// does, so the locked angle does not average to the middle, the lock does not seem to move a
+// whole turn, and the calibration comes out as from an encoder that counts turns.
+TEST(SimulatedProcedureTest, SteeringWrappedWhereALockSitsCalibratesAsUnwrapped) {
+  SimulatedProcedureOptions options;
+  options.steering_flicker_rad = 0.002;
+  const SimulatedCalibration turns =
+      run_simulated_calibration(design_robot(), table4_robot(), options);
+  ASSERT_TRUE(turns.result.ok()) << turns.result.verdict.text();
+  // The encoder's wrap put at the first lock's reading (a real encoder's is wherever it was
+  // mounted): that lock reads on both sides of it.
+  const LockedRun& first = turns.input.runs.front();
+  const std::vector<double>& locked = first.data.steer_angle_rad[first.locked_module];
+  const auto [low, high] = std::ranges::minmax(locked);
+  ASSERT_LT(low, high) << "the lock's reading does not flicker";
+  const double lock = 0.5 * (low + high);
+  options.wrap_steering = true;
+  options.steering_wrap_center_rad = lock + std::numbers::pi;
+  const SimulatedCalibration wrapped =
+      run_simulated_calibration(design_robot(), table4_robot(), options);
+  ASSERT_TRUE(wrapped.result.ok()) << wrapped.result.verdict.text();
+
+  ASSERT_EQ(turns.input.runs.size(), wrapped.input.runs.size());
+  for (std::size_t j = 0; j < turns.input.runs.size(); ++j) {
+    EXPECT_NEAR(wrap_pi(wrapped.input.runs[j].locked_steer_meas_rad -
+                        turns.input.runs[j].locked_steer_meas_rad),
+                0.0, 1e-9)
+        << "run " << j;
+  }
+  for (std::size_t i = 0; i < turns.result.modules.size(); ++i) {
+    const SwpcModuleParams& a = turns.result.modules[i].params;
+    const SwpcModuleParams& b = wrapped.result.modules[i].params;
+    EXPECT_NEAR(a.x_m, b.x_m, 1e-9) << "module " << i + 1;
+    EXPECT_NEAR(a.y_m, b.y_m, 1e-9) << "module " << i + 1;
+    EXPECT_NEAR(wrap_pi(a.steering_offset_rad - b.steering_offset_rad), 0.0, 1e-9)
+        << "module " << i + 1;
+    EXPECT_NEAR(a.wheel_radius_m, b.wheel_radius_m, 1e-9) << "module " << i + 1;
+  }
 }
 
 TEST(SimulatedProcedureTest, VelocityDrivenWheelsSlipAndBiasTheRadii) {

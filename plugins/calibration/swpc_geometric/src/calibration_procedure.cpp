@@ -5,8 +5,10 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "swivel/calibration/calibration_io.hpp"
+#include "swivel/run_log.hpp"
 
 namespace swivel::calibration {
 namespace {
@@ -40,9 +42,9 @@ void check_options(const ProcedureOptions& o) {
 
 }  // namespace
 
-CalibrationProcedure::CalibrationProcedure(const RobotModel& nominal,
-                                           const ProcedureOptions& options, double period_s)
-    : nominal_(nominal), options_(options) {
+CalibrationProcedure::CalibrationProcedure(RobotModel nominal, const ProcedureOptions& options,
+                                           double period_s)
+    : nominal_(std::move(nominal)), options_(options) {
   if (nominal_.drivetrain != DrivetrainKind::kSwpc) {
     throw ProcedureConfigError("", "the calibration procedure needs an swpc robot");
   }
@@ -189,9 +191,14 @@ Status CalibrationProcedure::record(const HardwareState& readings) noexcept {
   run.yaw_rad[k] = k == 0 ? mc.pose.yaw_rad : run.yaw_rad[0] + travel_rad_;  // unwrapped
   for (std::uint32_t i = 0; i < n_; ++i) {
     run.wheel_rad[k * n_ + i] = readings.wheel_angle_rad[i];
-    run.steer_rad[k * n_ + i] = readings.steer_angle_rad[i];
+    // Steering encoders may wrap to (-pi, pi]: unwrapped against the run's previous sample, as
+    // calibration_io does for a log, so that a module locked near +-pi neither averages to 0
+    // nor seems to move a whole turn.
+    const double steer = readings.steer_angle_rad[i];
+    run.steer_rad[k * n_ + i] =
+        k == 0 ? steer : unwrap_near(steer, run.steer_rad[(k - 1) * n_ + i]);
   }
-  run.locked_steer_sum_rad += readings.steer_angle_rad[plans_[run_].locked];
+  run.locked_steer_sum_rad += run.steer_rad[k * n_ + plans_[run_].locked];
   run.count = k + 1;
   last_sample_s_ = readings.stamp_s;
   return Status::kOk;

@@ -25,6 +25,14 @@ struct SimulatedProcedureOptions {
   /// Noise, quantization, non-systematic errors and seed of the world. The casters start
   /// where initial_steer_rad says; the procedure aligns them before each run.
   sim::SimOptions sim;
+  /// Steering encoders that report angles wrapped to (c - pi, c + pi] around c =
+  /// steering_wrap_center_rad, as absolute encoders do around their mounting.
+  bool wrap_steering = false;
+  double steering_wrap_center_rad = 0.0;
+  /// While the procedure records: steering readings that flicker by this much, up or down
+  /// from cycle to cycle in an irregular pattern, as a real encoder's do at a count boundary,
+  /// rad (the world's readings do not).
+  double steering_flicker_rad = 0.0;
 };
 
 struct SimulatedCalibration {

@@ -84,7 +84,7 @@ class CalibrationProcedure {
   /// Plans every run from the nominal model and sizes the recording storage for cycles of
   /// `period_s` (at most one sample per cycle, or per motion-capture sample when slower).
   /// Not real-time safe. @throws ProcedureConfigError.
-  CalibrationProcedure(const RobotModel& nominal, const ProcedureOptions& options, double period_s);
+  CalibrationProcedure(RobotModel nominal, const ProcedureOptions& options, double period_s);
 
   /// Real-time safe. One cycle: `readings` in, every module's setpoints and drive mode out.
   /// kError when the procedure cannot go on (last_error() says why; `out` then commands zero).
