@@ -149,6 +149,8 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       drivetrain_(&drivetrain),
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
       active_localization_(&localization),
+      run_samples_(options.run_sample_rate_hz > 0.0 ? 1.0 / options.run_sample_rate_hz : 0.0,
+                   1.0 / options.rate_hz),
       timing_(1.0 / options.rate_hz),
       odometry_monitor_(options.odometry_check),
       twist_window_(twist_window_options(options)),
@@ -192,7 +194,6 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
         "the loop rate " +
         std::to_string(options.rate_hz) + " Hz, got " + std::to_string(options.run_sample_rate_hz));
   }
-  if (options.run_sample_rate_hz > 0.0) run_sample_period_s_ = 1.0 / options.run_sample_rate_hz;
   copy_text(localization_name, state_.localization_plugin);
   state_.module_count = module_count_;
   state_.estimate = localization.estimate();
@@ -924,7 +925,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   }
   take_motion_capture(now_s, reading_ok);
   check_external_sensors(now_s);
-  if (reading_ok && current_.motion_capture.valid) run_sample_mocap_ = current_.motion_capture;
+  if (reading_ok && current_.motion_capture.valid) {
+    run_samples_.note_motion_capture(current_.motion_capture);
+  }
   if (!reading_ok && has_previous_ && !reading_gap_.active()) {
     // Readings stopped: the odometry follows the controlled stop until they resume.
     reading_gap_.begin(state_.estimate, state_.odometry_twist,
@@ -1015,7 +1018,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   const bool moving = !calibrating && !final_stop && !stopping_ &&
                       latched_fault_ == FaultCode::kNone && has_command_;
   if (moving) target = command_.twist;
-  run_sample_command_ = target;
+  run_samples_.note_command(target);
   Twist2 applied;
   const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
   bool zeroed = basis == nullptr && !calibrating;
@@ -1124,46 +1127,9 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   state_.steer_angle_rad = current_.steer_angle_rad;
   state_.stopping = stopping_;
   snapshot_.write(state_);
-  // Half a loop period early counts as on time, so that wake-up jitter does not move a
-  // sample to the next cycle; after a stall the schedule restarts rather than bursting.
-  if (run_sample_period_s_ > 0.0 &&
-      (run_sample_sequence_ == 0 || now_s >= next_run_sample_s_ - 0.5 * period_s_)) {
-    push_run_sample();
-    next_run_sample_s_ =
-        (run_sample_sequence_ == 1 ? now_s : next_run_sample_s_) + run_sample_period_s_;
-    if (next_run_sample_s_ <= now_s) next_run_sample_s_ = now_s + run_sample_period_s_;
-  }
+  run_samples_.publish(state_, now_s);
   last_cycle_s_ = now_s;
   has_last_cycle_ = true;
-}
-
-// The cycle's state as one run sample, into the recorder's ring. A full ring drops this
-// sample (never blocks the loop); its sequence number is used up all the same, so the
-// consumer sees the loss.
-void ControlLoop::push_run_sample() noexcept {
-  RunSample r;
-  r.sequence = ++run_sample_sequence_;
-  r.cycle = state_.cycle;
-  r.stamp_s = state_.stamp_s;
-  r.command_twist = run_sample_command_;
-  r.module_count = module_count_;
-  r.wheel_angle_rad = state_.wheel_angle_rad;
-  r.steer_angle_rad = state_.steer_angle_rad;
-  r.gyro_wz_radps = state_.gyro_wz_radps;
-  if (state_.has_truth) {
-    r.has_truth = true;
-    r.truth = state_.truth;
-    r.truth_stamp_s = state_.stamp_s;
-  } else if (run_sample_mocap_.valid) {
-    r.has_truth = true;
-    r.truth = run_sample_mocap_.pose;
-    r.truth_stamp_s = run_sample_mocap_.stamp_s;
-  }
-  run_sample_mocap_.valid = false;
-  r.estimate = state_.estimate.pose;
-  r.fault = state_.fault;
-  r.mode = state_.mode;
-  if (!run_samples_.try_push(r)) run_samples_dropped_.fetch_add(1, std::memory_order_relaxed);
 }
 
 }  // namespace swivel::rt

@@ -83,6 +83,7 @@
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
 #include "swivel/rt/run_sample.hpp"
+#include "swivel/rt/run_sample_stage.hpp"
 #include "swivel/rt/snapshot_buffer.hpp"
 #include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
@@ -252,18 +253,18 @@ class ControlLoop {
   /// sample not taken yet (LoopOptions::run_sample_rate_hz); false when there is none. The
   /// ring holds kRunSampleRingCapacity samples (5 s at 100 Hz): a consumer that falls further
   /// behind loses the newest ones, which shows as a jump in RunSample::sequence.
-  bool take_run_sample(RunSample& out) noexcept { return run_samples_.try_pop(out); }
+  bool take_run_sample(RunSample& out) noexcept { return run_samples_.take(out); }
 
   /// Any thread. Run samples the loop could not hand over because the ring was full.
   [[nodiscard]] std::uint64_t run_samples_dropped() const noexcept {
-    return run_samples_dropped_.load(std::memory_order_relaxed);
+    return run_samples_.dropped();
   }
 
   /// Any thread. The time between two run samples the loop produces, s; 0 when it produces
   /// none.
-  [[nodiscard]] double run_sample_period_s() const noexcept { return run_sample_period_s_; }
+  [[nodiscard]] double run_sample_period_s() const noexcept { return run_samples_.period_s(); }
 
-  static constexpr std::size_t kRunSampleRingCapacity = 512;
+  static constexpr std::size_t kRunSampleRingCapacity = RunSampleStage::kRingCapacity;
 
   /// Any thread. Real-time safe (lock-free; retries while the loop writes). The state at the
   /// end of the newest cycle.
@@ -423,7 +424,6 @@ class ControlLoop {
   void check_external_sensors(double now_s) noexcept;
   void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
-  void push_run_sample() noexcept;
   bool hold_hardware() noexcept;
   void take_request(double now_s, std::uint64_t& clear_id) noexcept;
   void answer_clear(std::uint64_t id, double now_s) noexcept;
@@ -486,8 +486,7 @@ class ControlLoop {
   /// Gyro samples taken per cycle at most, for the same reason.
   static constexpr std::size_t kGyroDrainLimit = decltype(gyro_)::capacity();
   SnapshotBuffer<StateSnapshot> snapshot_;
-  SpscRing<RunSample, kRunSampleRingCapacity> run_samples_;
-  std::atomic<std::uint64_t> run_samples_dropped_{0};
+  RunSampleStage run_samples_;
   TimingStats timing_;
   RtLog log_;
 
@@ -513,17 +512,12 @@ class ControlLoop {
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
   double last_cycle_s_ = 0.0;
   bool has_last_cycle_ = false;
-  bool hardware_paused_ = false;            // the loop's view of hardware_access_
-  bool last_write_zero_ = true;             // the last setpoints written were all zero
-  bool stopping_ = false;                   // the controlled stop was taken
-  double stop_catch_up_s_ = 0.0;            // extra time for the stop's first step (limit())
-  bool clear_pending_ = false;              // a request_clear() taken this cycle
-  double run_sample_period_s_ = 0.0;        // 0: no run samples
-  double next_run_sample_s_ = 0.0;          // when the next one is due
-  std::uint64_t run_sample_sequence_ = 0;   // run samples produced
-  MotionCaptureSample run_sample_mocap_{};  // newest one since the previous run sample
-  Twist2 run_sample_command_{};             // this cycle's target before the limits
-  GyroSample external_gyro_{};              // newest finite external gyro sample
+  bool hardware_paused_ = false;  // the loop's view of hardware_access_
+  bool last_write_zero_ = true;   // the last setpoints written were all zero
+  bool stopping_ = false;         // the controlled stop was taken
+  double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
+  bool clear_pending_ = false;    // a request_clear() taken this cycle
+  GyroSample external_gyro_{};    // newest finite external gyro sample
   bool has_external_gyro_ = false;
   SensorWatch gyro_watch_;
   SensorWatch motion_capture_watch_;
