@@ -47,9 +47,34 @@ TEST(PublishRateMeter, ShortByMoreThanTheToleranceFallsShortAndRecovers) {
   EXPECT_NEAR(meter.achieved_hz(), 859.0, 1.0);
   EXPECT_NEAR(meter.attainable_hz(), 1000.0, 1.0);
   EXPECT_TRUE(meter.short_of_rate());
+  // Back at the rate: the verdict follows at once, the change is reported after the quiet
+  // windows.
   EXPECT_EQ(run(meter, now_s, cycle, published, 5.0, 1000.0, 1000.0),
-            PublishRateMeter::Change::kRecovered);
+            PublishRateMeter::Change::kNone);
   EXPECT_FALSE(meter.short_of_rate());
+  EXPECT_EQ(run(meter, now_s, cycle, published, 60.0, 1000.0, 1000.0),
+            PublishRateMeter::Change::kRecovered);
+}
+
+// A rate that crosses the tolerance every window is reported once a minute, not every
+// window.
+TEST(PublishRateMeter, ARateAtTheToleranceIsReportedOnceAMinute) {
+  PublishRateMeter meter(1000.0);
+  double now_s = 10.0;
+  double published = 0.0;
+  std::uint64_t cycle = 0;
+  int changes = 0;
+  int short_windows = 0;
+  for (int window = 0; window < 60; ++window) {  // 120 s
+    const double rate = window % 2 == 0 ? 900.0 : 1000.0;
+    if (run(meter, now_s, cycle, published, 2.0, 1000.0, rate) != PublishRateMeter::Change::kNone) {
+      ++changes;
+    }
+    if (meter.short_of_rate()) ++short_windows;
+  }
+  EXPECT_GE(changes, 1);
+  EXPECT_LE(changes, 4);         // 120 s: at most two changes a minute
+  EXPECT_GE(short_windows, 20);  // the verdict itself follows every window
 }
 
 TEST(PublishRateMeter, WithinTheToleranceIsNoShortfall) {

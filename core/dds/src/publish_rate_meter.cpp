@@ -26,11 +26,15 @@ PublishRateMeter::Change PublishRateMeter::update(double now_s, std::uint64_t pu
   start_s_ = now_s;
   start_published_ = published;
   start_cycle_ = cycle;
-  const bool was_short = short_;
   short_ = achieved_hz_ < (1.0 - kShortfallTolerance) * attainable_hz_;
-  if (short_ && !was_short) return Change::kFellShort;
-  if (!short_ && was_short) return Change::kRecovered;
-  return Change::kNone;
+  if (quiet_windows_ > 0) {
+    --quiet_windows_;
+    return Change::kNone;
+  }
+  if (short_ == reported_short_) return Change::kNone;
+  reported_short_ = short_;
+  quiet_windows_ = kQuietWindows;
+  return short_ ? Change::kFellShort : Change::kRecovered;
 }
 
 }  // namespace swivel::dds

@@ -15,12 +15,18 @@ class PublishRateMeter {
   /// A shortfall: the achieved rate below the attainable one by more than this fraction.
   static constexpr double kShortfallTolerance = 0.05;
 
+  /// Windows after a reported change in which no other is reported: a rate near the
+  /// tolerance would otherwise fall short and recover every few windows (one log line a
+  /// minute at most with 2 s windows); short_of_rate() follows every window all the same.
+  static constexpr int kQuietWindows = 29;
+
   enum class Change { kNone, kFellShort, kRecovered };
 
   explicit PublishRateMeter(double configured_hz, double window_s = 2.0);
 
   /// At monotonic time `now_s`, `published` states written so far, the loop's newest cycle
-  /// `cycle` (0 while there is none). Returns how the verdict changed when a window closed.
+  /// `cycle` (0 while there is none). Returns how the reported verdict changed when a
+  /// window closed (kQuietWindows apart at least).
   Change update(double now_s, std::uint64_t published, std::uint64_t cycle);
 
   [[nodiscard]] double configured_hz() const { return configured_hz_; }
@@ -41,6 +47,8 @@ class PublishRateMeter {
   double achieved_hz_ = 0.0;
   double attainable_hz_ = 0.0;
   bool short_ = false;
+  bool reported_short_ = false;  ///< the last change returned was kFellShort
+  int quiet_windows_ = 0;        ///< windows left before another change is reported
 };
 
 }  // namespace swivel::dds
