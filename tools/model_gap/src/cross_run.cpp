@@ -180,10 +180,35 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
   return result;
 }
 
-void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
-                            const std::string& dir) {
+namespace {
+
+nlohmann::json fit_run_json(const FitRun& f) {
   using nlohmann::json;
-  std::filesystem::create_directories(dir);
+  json named = json::array();
+  for (const FittedEffect& e : f.named) {
+    for (std::size_t i = 0; i < e.keys.size(); ++i) {
+      named.push_back({{"parameter", e.name + "." + e.keys[i]},
+                       {"value", e.values[i]},
+                       {"sigma", std::isfinite(e.sigmas[i]) ? json(e.sigmas[i]) : json(nullptr)}});
+    }
+  }
+  json others = json::array();
+  for (std::size_t k = 0; k < f.others.size(); ++k) {
+    others.push_back({{"run", f.others[k]},
+                      {"nominal_rms_position_m", f.nominal_rms_m[k]},
+                      {"fitted_rms_position_m", f.fitted_rms_m[k]},
+                      {"ratio", f.ratio[k]}});
+  }
+  return {{"run", f.run},
+          {"verdict", verdict_name(f.verdict)},
+          {"named", named},
+          {"motion_capture", f.truth},
+          {"median_ratio", median(f.ratio)},
+          {"others", others}};
+}
+
+nlohmann::json cross_run_json(const CrossRunResult& r, const RobotModel& nominal) {
+  using nlohmann::json;
   json j;
   j["robot"] = nominal.name;
   j["model"] = nominal.source_file;
@@ -199,30 +224,7 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
   j["unexplained"] = r.unexplained;
   j["skipped"] = r.skipped;
   json fits = json::array();
-  for (const FitRun& f : r.fits) {
-    json named = json::array();
-    for (const FittedEffect& e : f.named) {
-      for (std::size_t i = 0; i < e.keys.size(); ++i) {
-        named.push_back(
-            {{"parameter", e.name + "." + e.keys[i]},
-             {"value", e.values[i]},
-             {"sigma", std::isfinite(e.sigmas[i]) ? json(e.sigmas[i]) : json(nullptr)}});
-      }
-    }
-    json others = json::array();
-    for (std::size_t k = 0; k < f.others.size(); ++k) {
-      others.push_back({{"run", f.others[k]},
-                        {"nominal_rms_position_m", f.nominal_rms_m[k]},
-                        {"fitted_rms_position_m", f.fitted_rms_m[k]},
-                        {"ratio", f.ratio[k]}});
-    }
-    fits.push_back({{"run", f.run},
-                    {"verdict", verdict_name(f.verdict)},
-                    {"named", named},
-                    {"motion_capture", f.truth},
-                    {"median_ratio", median(f.ratio)},
-                    {"others", others}});
-  }
+  for (const FitRun& f : r.fits) fits.push_back(fit_run_json(f));
   j["fits"] = fits;
   json agreement = json::array();
   for (const ParameterAgreement& a : r.agreement) {
@@ -238,11 +240,11 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
                          {"within_2_sigma", a.within_2_sigma}});
   }
   j["agreement"] = agreement;
-  std::ofstream js(dir + "/cross_run.json");
-  js << j.dump(2) << "\n";
-  if (!js) throw std::runtime_error("cannot write " + dir + "/cross_run.json");
+  return j;
+}
 
-  std::ofstream md(dir + "/cross_run.md");
+void write_cross_run_markdown(const CrossRunResult& r, const RobotModel& nominal,
+                              std::ostream& md) {
   md << "# Across runs: " << nominal.name << "\n\n"
      << "Each run in turn is analysed (sensor to pose); what it names is replayed on every other "
         "run beside the nominal model, each run with its own motion-capture nuisances fitted. "
@@ -281,6 +283,18 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
     md << "\n## Runs not used\n\n";
     for (const std::string& s : r.skipped) md << "- " << s << "\n";
   }
+}
+
+}  // namespace
+
+void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
+                            const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  std::ofstream js(dir + "/cross_run.json");
+  js << cross_run_json(r, nominal).dump(2) << "\n";
+  if (!js) throw std::runtime_error("cannot write " + dir + "/cross_run.json");
+  std::ofstream md(dir + "/cross_run.md");
+  write_cross_run_markdown(r, nominal, md);
   if (!md) throw std::runtime_error("cannot write " + dir + "/cross_run.md");
 }
 

@@ -383,6 +383,111 @@ FitOutcome score(const FitProblem& problem, std::span<const double> theta) {
   return out;
 }
 
+namespace {
+
+ceres::Solver::Options solver_options_of(const FitOptions& options) {
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.parameter_tolerance = options.parameter_tolerance;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  return solver_options;
+}
+
+// The Jacobian (rows x p, row-major) of a sparse one.
+std::vector<double> dense_jacobian(const ceres::CRSMatrix& jac, std::size_t p) {
+  std::vector<double> dense(static_cast<std::size_t>(jac.num_rows) * p, 0.0);
+  for (int r = 0; r < jac.num_rows; ++r) {
+    for (int k = jac.rows[static_cast<std::size_t>(r)];
+         k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
+      dense[static_cast<std::size_t>(r) * p +
+            static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
+          jac.values[static_cast<std::size_t>(k)];
+    }
+  }
+  return dense;
+}
+
+// Combinations the run barely informs go back to their anchors (z: the optimum, z units;
+// `dense`: its Jacobian with `rows` rows).
+void anchor_uninformed(const std::vector<double>& dense, int rows,
+                       const std::vector<ParamSpec>& specs, bool scale_free,
+                       std::vector<double>& z) {
+  const std::size_t p = specs.size();
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
+  for (int r = 0; r < rows; ++r) {
+    const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p, pp);
+    information.noalias() += row * row.transpose();
+  }
+  const InformationSplit split = split_information(information, scale_free);
+  Eigen::VectorXd offset(pp);
+  for (std::size_t j = 0; j < p; ++j) {
+    const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
+    offset(static_cast<Eigen::Index>(j)) = z[j] - anchor / specs[j].scale;
+  }
+  // The part of the offset (in y units) along the combinations not fixed, back in z units.
+  const Eigen::VectorXd removed =
+      split.d.asDiagonal() * (split.null_space * split.d.cwiseInverse().asDiagonal() * offset);
+  if (removed.norm() > 0.0) {
+    for (std::size_t j = 0; j < p; ++j) {
+      z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)),
+                        specs[j].lower / specs[j].scale, specs[j].upper / specs[j].scale);
+    }
+  }
+}
+
+// The covariance as if the rows were independent (out.naive_*), model units.
+void naive_covariance(const std::vector<double>& dense, const std::vector<ParamSpec>& specs,
+                      bool scale_free, FitOutcome& out) {
+  const std::size_t p = specs.size();
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
+  for (std::size_t i = 0; i < out.residuals.size(); ++i) {
+    if (!std::isfinite(out.residuals[i])) continue;
+    const Eigen::Map<const Eigen::VectorXd> row(dense.data() + i * p, pp);
+    bread.noalias() += row * row.transpose();
+  }
+  const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
+  Eigen::MatrixXd naive = split_information(bread, scale_free).inverse * (out.rss / dof);
+  out.naive_sigmas.resize(p);
+  out.naive_covariance.resize(p * p);
+  for (std::size_t a = 0; a < p; ++a) {
+    const auto aa = static_cast<Eigen::Index>(a);
+    out.naive_sigmas[a] = std::sqrt(std::max(naive(aa, aa), 0.0)) * specs[a].scale;
+    for (std::size_t b = 0; b < p; ++b) {
+      out.naive_covariance[a * p + b] =
+          naive(aa, static_cast<Eigen::Index>(b)) * specs[a].scale * specs[b].scale;
+    }
+  }
+}
+
+// The sandwich covariance and sigmas (out.covariance, out.sigmas, out.observable), model
+// units.
+void robust_covariance(const FitProblem& problem, const std::vector<double>& dense,
+                       const std::vector<ParamSpec>& specs, bool scale_free, FitOutcome& out) {
+  const std::size_t p = specs.size();
+  std::vector<std::size_t> groups = problem.row_group;
+  if (groups.empty()) groups.assign(problem.row_count, 0);
+  const std::vector<double> cov_z =
+      sandwich_covariance(dense, p, out.residuals, problem.row_window, groups, problem.window_count,
+                          out.observable, scale_free);
+  // The same, as if the rows were independent.
+  naive_covariance(dense, specs, scale_free, out);
+  out.covariance.assign(p * p, 0.0);
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t b = 0; b < p; ++b) {
+      out.covariance[a * p + b] = cov_z[a * p + b] * specs[a].scale * specs[b].scale;
+    }
+    out.sigmas[a] =
+        out.observable[a] != 0 ? std::sqrt(std::max(out.covariance[a * p + a], 0.0)) : kInf;
+  }
+}
+
+}  // namespace
+
 FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                const FitOptions& options) {
   const std::size_t p = specs.size();
@@ -401,95 +506,24 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
     if (specs[j].upper < 1e299)
       solver_problem.SetParameterUpperBound(z.data(), jj, specs[j].upper / specs[j].scale);
   }
-
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
-  solver_options.max_num_iterations = options.max_iterations;
-  solver_options.function_tolerance = options.function_tolerance;
-  solver_options.parameter_tolerance = options.parameter_tolerance;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &solver_problem, &summary);
+  ceres::Solve(solver_options_of(options), &solver_problem, &summary);
 
   // Jacobian at the optimum (z units).
   ceres::CRSMatrix jac;
   ceres::Problem::EvaluateOptions eval;
   const bool have_jacobian = solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac);
-  std::vector<double> dense(have_jacobian ? static_cast<std::size_t>(jac.num_rows) * p : 0U, 0.0);
+  std::vector<double> dense;
   if (have_jacobian) {
-    for (int r = 0; r < jac.num_rows; ++r) {
-      for (int k = jac.rows[static_cast<std::size_t>(r)];
-           k < jac.rows[static_cast<std::size_t>(r) + 1]; ++k) {
-        dense[static_cast<std::size_t>(r) * p +
-              static_cast<std::size_t>(jac.cols[static_cast<std::size_t>(k)])] =
-            jac.values[static_cast<std::size_t>(k)];
-      }
-    }
-    // Combinations the run barely informs go back to their anchors.
-    const auto pp = static_cast<Eigen::Index>(p);
-    Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
-    for (int r = 0; r < jac.num_rows; ++r) {
-      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p,
-                                                  pp);
-      information.noalias() += row * row.transpose();
-    }
-    const InformationSplit split = split_information(information, scale_free);
-    Eigen::VectorXd offset(pp);
-    for (std::size_t j = 0; j < p; ++j) {
-      const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
-      offset(static_cast<Eigen::Index>(j)) = z[j] - anchor / specs[j].scale;
-    }
-    // The part of the offset (in y units) along the combinations not fixed, back in z units.
-    const Eigen::VectorXd removed =
-        split.d.asDiagonal() * (split.null_space * split.d.cwiseInverse().asDiagonal() * offset);
-    if (removed.norm() > 0.0) {
-      for (std::size_t j = 0; j < p; ++j) {
-        z[j] = std::clamp(z[j] - removed(static_cast<Eigen::Index>(j)),
-                          specs[j].lower / specs[j].scale, specs[j].upper / specs[j].scale);
-      }
-    }
+    dense = dense_jacobian(jac, p);
+    anchor_uninformed(dense, jac.num_rows, specs, scale_free, z);
   }
   std::vector<double> theta(p);
   for (std::size_t j = 0; j < p; ++j) theta[j] = z[j] * specs[j].scale;
   FitOutcome out = score(problem, theta);
   out.iterations = static_cast<int>(summary.iterations.size());
   if (!out.ok || !have_jacobian) return out;
-  std::vector<std::size_t> groups = problem.row_group;
-  if (groups.empty()) groups.assign(problem.row_count, 0);
-  const std::vector<double> cov_z =
-      sandwich_covariance(dense, p, out.residuals, problem.row_window, groups, problem.window_count,
-                          out.observable, scale_free);
-  // The same, as if the rows were independent.
-  {
-    const auto pp = static_cast<Eigen::Index>(p);
-    Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
-    for (std::size_t i = 0; i < out.residuals.size(); ++i) {
-      if (!std::isfinite(out.residuals[i])) continue;
-      const Eigen::Map<const Eigen::VectorXd> row(dense.data() + i * p, pp);
-      bread.noalias() += row * row.transpose();
-    }
-    const double dof = std::max(1.0, static_cast<double>(out.n) - static_cast<double>(p));
-    Eigen::MatrixXd naive = split_information(bread, scale_free).inverse * (out.rss / dof);
-    out.naive_sigmas.resize(p);
-    out.naive_covariance.resize(p * p);
-    for (std::size_t a = 0; a < p; ++a) {
-      const auto aa = static_cast<Eigen::Index>(a);
-      out.naive_sigmas[a] = std::sqrt(std::max(naive(aa, aa), 0.0)) * specs[a].scale;
-      for (std::size_t b = 0; b < p; ++b) {
-        out.naive_covariance[a * p + b] =
-            naive(aa, static_cast<Eigen::Index>(b)) * specs[a].scale * specs[b].scale;
-      }
-    }
-  }
-  out.covariance.assign(p * p, 0.0);
-  for (std::size_t a = 0; a < p; ++a) {
-    for (std::size_t b = 0; b < p; ++b) {
-      out.covariance[a * p + b] = cov_z[a * p + b] * specs[a].scale * specs[b].scale;
-    }
-    out.sigmas[a] =
-        out.observable[a] != 0 ? std::sqrt(std::max(out.covariance[a * p + a], 0.0)) : kInf;
-  }
+  robust_covariance(problem, dense, specs, scale_free, out);
   return out;
 }
 

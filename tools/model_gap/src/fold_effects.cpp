@@ -67,6 +67,79 @@ struct Change {
   bool bounded = false;
 };
 
+// The parameters of `out` that effect `name` folds into, and their folded values (from the
+// model's values, as `out` has them); false when no parameter of the robot model holds it.
+bool collect_changes(const std::string& name, const EffectParams& params, RobotModel& out,
+                     std::vector<Change>& changes) {
+  const bool swpc = out.drivetrain == DrivetrainKind::kSwpc;
+  const auto scale = [&](const std::string& key, const std::string& target, double& field) {
+    const double s = param_or(params, key, 1.0);
+    std::string what = name;
+    what.append(".").append(key).append(" = ").append(number(s));
+    changes.push_back({what, target, &field, field * s});
+  };
+  const auto add = [&](const std::string& key, const std::string& target, double& field,
+                       double limit) {
+    const double v = param_or(params, key, 0.0);
+    std::string what = name;
+    what.append(".").append(key).append(" = ").append(number(v));
+    changes.push_back({what, target, &field, field + v, -limit, limit, true});
+  };
+  if (name == "gyro_bias") {
+    add("bias_rad_s", "sensors.gyro.bias_rad_s", out.sensors.gyro.bias_rad_s, kMaxGyroBiasRadps);
+  } else if (name == "gyro_scale") {
+    scale("scale", "sensors.gyro.scale", out.sensors.gyro.scale);
+    changes.back().min = kMinGyroScale;
+    changes.back().max = kMaxGyroScale;
+    changes.back().bounded = true;
+  } else if (name == "wheel_radius" && !swpc) {
+    scale("left_scale", "differential.wheel_radius_left_m", out.differential.wheel_radius_left_m);
+    scale("right_scale", "differential.wheel_radius_right_m",
+          out.differential.wheel_radius_right_m);
+  } else if (name == "track_width" && !swpc) {
+    scale("scale", "differential.track_width_m", out.differential.track_width_m);
+  } else if (swpc &&
+             (name == "wheel_radius" || name == "caster_offset" || name == "steering_offset")) {
+    for (std::size_t i = 0; i < out.modules.size(); ++i) {
+      SwpcModuleParams& m = out.modules[i];
+      const std::string where = "swpc.modules[" + std::to_string(i) + "].";
+      if (name == "wheel_radius") {
+        scale(module_key(i, "scale"), where + "wheel_radius_m", m.wheel_radius_m);
+      } else if (name == "caster_offset") {
+        scale(module_key(i, "scale"), where + "caster_offset_m", m.caster_offset_m);
+      } else {
+        add(module_key(i, "rad"), where + "steering_offset_rad", m.steering_offset_rad,
+            kMaxSteeringOffsetRad);
+      }
+    }
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// Writes `changes` of effect `name` into the model, all or nothing: an effect whose folded
+// value the model file could not hold stays whole.
+void apply_changes(const std::string& name, const EffectParams& params,
+                   const std::vector<Change>& changes, FoldResult& result) {
+  const Change* outside = nullptr;
+  for (const Change& c : changes) {
+    if (c.bounded && !(c.folded >= c.min && c.folded <= c.max)) outside = &c;
+  }
+  if (outside != nullptr) {
+    result.kept.push_back(name + ": folded, " + outside->target + " would be " +
+                          number(outside->folded) + ", outside the robot model's [" +
+                          number(outside->min) + ", " + number(outside->max) + "]");
+    result.model.effects[name] = params;
+    return;
+  }
+  for (const Change& c : changes) {
+    result.folded.push_back(c.source + " -> " + c.target + " " + number(*c.field) + " -> " +
+                            number(c.folded));
+    *c.field = c.folded;
+  }
+}
+
 }  // namespace
 
 FoldResult fold_effects(const RobotModel& model) {
@@ -74,80 +147,18 @@ FoldResult fold_effects(const RobotModel& model) {
   FoldResult result;
   result.model = model;
   result.model.effects.clear();
-  RobotModel& out = result.model;
-  const bool swpc = model.drivetrain == DrivetrainKind::kSwpc;
-
-  for (const auto& effect : model.effects) {
-    // Named references, not a structured binding: the lambdas below capture them.
-    const std::string& name = effect.first;
-    const EffectParams& params = effect.second;
+  for (const auto& [name, params] : model.effects) {
     std::vector<Change> changes;
-    const auto scale = [&](const std::string& key, const std::string& target, double& field) {
-      const double s = param_or(params, key, 1.0);
-      std::string what = name;
-      what.append(".").append(key).append(" = ").append(number(s));
-      changes.push_back({what, target, &field, field * s});
-    };
-    const auto add = [&](const std::string& key, const std::string& target, double& field,
-                         double limit) {
-      const double v = param_or(params, key, 0.0);
-      std::string what = name;
-      what.append(".").append(key).append(" = ").append(number(v));
-      changes.push_back({what, target, &field, field + v, -limit, limit, true});
-    };
-    if (name == "gyro_bias") {
-      add("bias_rad_s", "sensors.gyro.bias_rad_s", out.sensors.gyro.bias_rad_s, kMaxGyroBiasRadps);
-    } else if (name == "gyro_scale") {
-      scale("scale", "sensors.gyro.scale", out.sensors.gyro.scale);
-      changes.back().min = kMinGyroScale;
-      changes.back().max = kMaxGyroScale;
-      changes.back().bounded = true;
-    } else if (name == "wheel_radius" && !swpc) {
-      scale("left_scale", "differential.wheel_radius_left_m", out.differential.wheel_radius_left_m);
-      scale("right_scale", "differential.wheel_radius_right_m",
-            out.differential.wheel_radius_right_m);
-    } else if (name == "track_width" && !swpc) {
-      scale("scale", "differential.track_width_m", out.differential.track_width_m);
-    } else if (swpc &&
-               (name == "wheel_radius" || name == "caster_offset" || name == "steering_offset")) {
-      for (std::size_t i = 0; i < out.modules.size(); ++i) {
-        SwpcModuleParams& m = out.modules[i];
-        const std::string where = "swpc.modules[" + std::to_string(i) + "].";
-        if (name == "wheel_radius") {
-          scale(module_key(i, "scale"), where + "wheel_radius_m", m.wheel_radius_m);
-        } else if (name == "caster_offset") {
-          scale(module_key(i, "scale"), where + "caster_offset_m", m.caster_offset_m);
-        } else {
-          add(module_key(i, "rad"), where + "steering_offset_rad", m.steering_offset_rad,
-              kMaxSteeringOffsetRad);
-        }
-      }
-    } else {
-      const auto reason = kept_reasons().find(name);
-      result.kept.push_back(name + ": " +
-                            (reason != kept_reasons().end()
-                                 ? reason->second
-                                 : std::string("no parameter of the robot model holds it")));
-      out.effects[name] = params;
+    if (collect_changes(name, params, result.model, changes)) {
+      apply_changes(name, params, changes, result);
       continue;
     }
-    // All or nothing: an effect whose folded value the model file could not hold stays whole.
-    const Change* outside = nullptr;
-    for (const Change& c : changes) {
-      if (c.bounded && !(c.folded >= c.min && c.folded <= c.max)) outside = &c;
-    }
-    if (outside != nullptr) {
-      result.kept.push_back(name + ": folded, " + outside->target + " would be " +
-                            number(outside->folded) + ", outside the robot model's [" +
-                            number(outside->min) + ", " + number(outside->max) + "]");
-      out.effects[name] = params;
-      continue;
-    }
-    for (const Change& c : changes) {
-      result.folded.push_back(c.source + " -> " + c.target + " " + number(*c.field) + " -> " +
-                              number(c.folded));
-      *c.field = c.folded;
-    }
+    const auto reason = kept_reasons().find(name);
+    result.kept.push_back(name + ": " +
+                          (reason != kept_reasons().end()
+                               ? reason->second
+                               : std::string("no parameter of the robot model holds it")));
+    result.model.effects[name] = params;
   }
   return result;
 }

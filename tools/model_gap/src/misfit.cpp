@@ -98,100 +98,108 @@ double median_abs(std::vector<double> v) {
   return *mid;
 }
 
-}  // namespace
+// Jumps: windows far outside the channel's robust spread (none when the channel has fewer
+// than 10 finite windows). A transient that the run and the replay place a little apart in
+// time moves residual from one window into the next: two neighbours, one of them far out,
+// that mostly cancel. What the model got wrong there is their sum (whitened: over the square
+// root of two), which is what counts.
+void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
+                std::vector<MisfitTest>& out) {
+  const std::size_t w = y.size();
+  std::vector<double> finite;
+  const double far = kJumpZ * std::max(1.4826 * median_abs_finite(y), 1.0);
+  for (std::size_t j = 0; j < w; ++j) {
+    const double v = y[j];
+    if (!std::isfinite(v)) continue;
+    const double next = j + 1 < w ? y[j + 1] : std::numeric_limits<double>::quiet_NaN();
+    const double larger = std::max(std::abs(v), std::abs(next));
+    if (std::isfinite(next) && larger > far && std::abs(v + next) < 0.5 * larger) {
+      finite.push_back((v + next) / std::sqrt(2.0));
+      ++j;
+      continue;
+    }
+    finite.push_back(v);
+  }
+  // A jump stands out of the channel's robust spread and of its modelled noise alike (a
+  // channel quieter than its model, say quantized to whole counts, has a tiny spread).
+  const double spread = std::max(1.4826 * median_abs(finite), 1.0);
+  if (!(spread > 0.0 && finite.size() >= 10)) return;
+  std::vector<double> z;
+  z.reserve(finite.size());
+  for (double v : finite) z.push_back(std::abs(v) / spread);
+  std::sort(z.begin(), z.end(), std::greater<>());
+  const auto count = static_cast<std::size_t>(
+      std::count_if(z.begin(), z.end(), [](double v) { return v > kJumpZ; }));
+  // The second largest decides (or the largest alone, against the higher bar); reported on
+  // the scale of the other tests: 5 at the bar.
+  const double second = z.size() > 1 ? z[1] : 0.0;
+  const double strength = std::max(second / kJumpZ, z[0] / kLoneJumpZ);
+  out.push_back(
+      {"jumps", info.name,
+       count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "") : "no jumps",
+       5.0 * strength, 0.0, strength * kJumpZ, info.module});
+}
 
-std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
-  std::vector<MisfitTest> out;
+// The windows' indices, each its own window for the covariance, all in one group.
+struct WindowRows {
+  explicit WindowRows(std::size_t w) : window(w), one_group(w, 0) {
+    for (std::size_t j = 0; j < w; ++j) window[j] = j;
+  }
+  std::vector<std::size_t> window;
+  std::vector<std::size_t> one_group;
+};
+
+// Trend: a constant rate, the channel's own motion (signed and absolute) and the
+// acceleration.
+MisfitTest trend_test(const MisfitInputs& in, std::size_t c, const std::vector<double>& y,
+                      const WindowRows& rows) {
   const std::size_t w = in.windows;
-  std::vector<std::size_t> window(w);
-  for (std::size_t j = 0; j < w; ++j) window[j] = j;
-  const std::vector<std::size_t> one_group(w, 0);
-  const auto whitened = [&](std::size_t c) {
-    std::vector<double> y(w);
-    for (std::size_t j = 0; j < w; ++j) y[j] = in.residuals[c * w + j] / in.sigma[c * w + j];
-    return y;
-  };
+  constexpr std::size_t kTrend = 4;
+  std::vector<double> x(w * kTrend);
+  for (std::size_t j = 0; j < w; ++j) {
+    const double s = in.sigma[c * w + j];
+    const double m = in.own_change[c * w + j];
+    x[j * kTrend + 0] = 1.0 / s;
+    x[j * kTrend + 1] = m / s;
+    x[j * kTrend + 2] = std::abs(m) / s;
+    x[j * kTrend + 3] = in.accel[j] / s;
+  }
+  const Regression trend = regress(y, x, kTrend, rows.window, rows.one_group, w);
+  static constexpr const char* kTrendLabels[kTrend] = {
+      "grows with time", "grows with its own motion", "grows with the amount of motion",
+      "grows with acceleration"};
+  std::size_t strongest = 0;
+  for (std::size_t k = 1; k < trend.t.size(); ++k) {
+    if (std::abs(trend.t[k]) > std::abs(trend.t[strongest])) strongest = k;
+  }
+  const ChannelInfo& info = in.channels[c];
+  return {"trend",    info.name,   trend.t.empty() ? "irregular" : kTrendLabels[strongest],
+          trend.z,    trend.share, trend.size,
+          info.module};
+}
 
-  for (std::size_t c = 0; c < in.channels.size(); ++c) {
-    const ChannelInfo& info = in.channels[c];
-    const std::vector<double> y = whitened(c);
-
-    // Jumps: windows far outside the channel's robust spread. A transient that the run and
-    // the replay place a little apart in time moves residual from one window into the next:
-    // two neighbours, one of them far out, that mostly cancel. What the model got wrong there
-    // is their sum (whitened: over the square root of two), which is what counts.
-    std::vector<double> finite;
-    const double far = kJumpZ * std::max(1.4826 * median_abs_finite(y), 1.0);
-    for (std::size_t j = 0; j < w; ++j) {
-      const double v = y[j];
-      if (!std::isfinite(v)) continue;
-      const double next = j + 1 < w ? y[j + 1] : std::numeric_limits<double>::quiet_NaN();
-      const double larger = std::max(std::abs(v), std::abs(next));
-      if (std::isfinite(next) && larger > far && std::abs(v + next) < 0.5 * larger) {
-        finite.push_back((v + next) / std::sqrt(2.0));
-        ++j;
-        continue;
-      }
-      finite.push_back(v);
-    }
-    // A jump stands out of the channel's robust spread and of its modelled noise alike (a
-    // channel quieter than its model, say quantized to whole counts, has a tiny spread).
-    const double spread = std::max(1.4826 * median_abs(finite), 1.0);
-    if (spread > 0.0 && finite.size() >= 10) {
-      std::vector<double> z;
-      for (double v : finite) z.push_back(std::abs(v) / spread);
-      std::sort(z.begin(), z.end(), std::greater<>());
-      const auto count = static_cast<std::size_t>(
-          std::count_if(z.begin(), z.end(), [](double v) { return v > kJumpZ; }));
-      // The second largest decides (or the largest alone, against the higher bar); reported on
-      // the scale of the other tests: 5 at the bar.
-      const double second = z.size() > 1 ? z[1] : 0.0;
-      const double strength = std::max(second / kJumpZ, z[0] / kLoneJumpZ);
-      out.push_back({"jumps", info.name,
-                     count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "")
-                               : "no jumps",
-                     5.0 * strength, 0.0, strength * kJumpZ, info.module});
-    }
-
-    // Trend: a constant rate, the channel's own motion (signed and absolute) and the
-    // acceleration.
-    constexpr std::size_t kTrend = 4;
-    std::vector<double> x(w * kTrend);
+// Repeats with a wheel's turn: for each wheel, the change of sin and cos of its angle.
+void wheel_periodic_tests(const MisfitInputs& in, std::size_t c, const std::vector<double>& y,
+                          const WindowRows& rows, std::vector<MisfitTest>& out) {
+  const std::size_t w = in.windows;
+  for (std::size_t i = 0; i < in.wheel_sin_change.size(); ++i) {
+    std::vector<double> xw(w * 2);
     for (std::size_t j = 0; j < w; ++j) {
       const double s = in.sigma[c * w + j];
-      const double m = in.own_change[c * w + j];
-      x[j * kTrend + 0] = 1.0 / s;
-      x[j * kTrend + 1] = m / s;
-      x[j * kTrend + 2] = std::abs(m) / s;
-      x[j * kTrend + 3] = in.accel[j] / s;
+      xw[j * 2 + 0] = in.wheel_sin_change[i][j] / s;
+      xw[j * 2 + 1] = in.wheel_cos_change[i][j] / s;
     }
-    const Regression trend = regress(y, x, kTrend, window, one_group, w);
-    static const char* const kTrendLabels[kTrend] = {"grows with time", "grows with its own motion",
-                                                     "grows with the amount of motion",
-                                                     "grows with acceleration"};
-    std::size_t strongest = 0;
-    for (std::size_t k = 1; k < trend.t.size(); ++k) {
-      if (std::abs(trend.t[k]) > std::abs(trend.t[strongest])) strongest = k;
-    }
-    out.push_back({"trend", info.name, trend.t.empty() ? "irregular" : kTrendLabels[strongest],
-                   trend.z, trend.share, trend.size, info.module});
-
-    // Repeats with a wheel's turn: for each wheel, the change of sin and cos of its angle.
-    for (std::size_t i = 0; i < in.wheel_sin_change.size(); ++i) {
-      std::vector<double> xw(w * 2);
-      for (std::size_t j = 0; j < w; ++j) {
-        const double s = in.sigma[c * w + j];
-        xw[j * 2 + 0] = in.wheel_sin_change[i][j] / s;
-        xw[j * 2 + 1] = in.wheel_cos_change[i][j] / s;
-      }
-      const Regression periodic = regress(y, xw, 2, window, one_group, w);
-      out.push_back({"wheel_periodic", info.name,
-                     "repeats with wheel " + std::to_string(i + 1) + "'s turn", periodic.z,
-                     periodic.share, periodic.size, i});
-    }
+    const Regression periodic = regress(y, xw, 2, rows.window, rows.one_group, w);
+    out.push_back({"wheel_periodic", in.channels[c].name,
+                   "repeats with wheel " + std::to_string(i + 1) + "'s turn", periodic.z,
+                   periodic.share, periodic.size, i});
   }
+}
 
-  // World drift: the displacement residual turned into the world frame has a constant part.
+// World drift: the displacement residual turned into the world frame has a constant part
+// (the first pair of position channels; none without one).
+void world_drift_test(const MisfitInputs& in, std::vector<MisfitTest>& out) {
+  const std::size_t w = in.windows;
   std::size_t cx = in.channels.size();
   for (std::size_t c = 0; c + 1 < in.channels.size(); ++c) {
     if (in.channels[c].kind == ChannelKind::kPosition &&
@@ -200,32 +208,47 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
       break;
     }
   }
-  if (cx < in.channels.size()) {
-    // Two rows per window (world x and y), both in the same window for the covariance.
-    std::vector<double> y(2 * w);
-    std::vector<double> x(2 * w * 2, 0.0);
-    std::vector<std::size_t> rows_window(2 * w);
-    std::vector<std::size_t> rows_axis(2 * w);
-    for (std::size_t j = 0; j < w; ++j) {
-      const double rx = in.residuals[cx * w + j];
-      const double ry = in.residuals[(cx + 1) * w + j];
-      const double s = std::sqrt(0.5 * (in.sigma[cx * w + j] * in.sigma[cx * w + j] +
-                                        in.sigma[(cx + 1) * w + j] * in.sigma[(cx + 1) * w + j]));
-      const double c = std::cos(in.start_yaw_rad[j]);
-      const double sn = std::sin(in.start_yaw_rad[j]);
-      y[2 * j] = (c * rx - sn * ry) / s;
-      y[2 * j + 1] = (sn * rx + c * ry) / s;
-      x[(2 * j) * 2 + 0] = 1.0 / s;
-      x[(2 * j + 1) * 2 + 1] = 1.0 / s;
-      rows_window[2 * j] = j;
-      rows_window[2 * j + 1] = j;
-      rows_axis[2 * j] = 0;
-      rows_axis[2 * j + 1] = 1;
-    }
-    const Regression drift = regress(y, x, 2, rows_window, rows_axis, w);
-    out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction",
-                   drift.z, drift.share, drift.size, 0});
+  if (cx >= in.channels.size()) return;
+  // Two rows per window (world x and y), both in the same window for the covariance.
+  std::vector<double> y(2 * w);
+  std::vector<double> x(2 * w * 2, 0.0);
+  std::vector<std::size_t> rows_window(2 * w);
+  std::vector<std::size_t> rows_axis(2 * w);
+  for (std::size_t j = 0; j < w; ++j) {
+    const double rx = in.residuals[cx * w + j];
+    const double ry = in.residuals[(cx + 1) * w + j];
+    const double s = std::sqrt(0.5 * (in.sigma[cx * w + j] * in.sigma[cx * w + j] +
+                                      in.sigma[(cx + 1) * w + j] * in.sigma[(cx + 1) * w + j]));
+    const double c = std::cos(in.start_yaw_rad[j]);
+    const double sn = std::sin(in.start_yaw_rad[j]);
+    y[2 * j] = (c * rx - sn * ry) / s;
+    y[2 * j + 1] = (sn * rx + c * ry) / s;
+    x[(2 * j) * 2 + 0] = 1.0 / s;
+    x[(2 * j + 1) * 2 + 1] = 1.0 / s;
+    rows_window[2 * j] = j;
+    rows_window[2 * j + 1] = j;
+    rows_axis[2 * j] = 0;
+    rows_axis[2 * j + 1] = 1;
   }
+  const Regression drift = regress(y, x, 2, rows_window, rows_axis, w);
+  out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction", drift.z,
+                 drift.share, drift.size, 0});
+}
+
+}  // namespace
+
+std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
+  std::vector<MisfitTest> out;
+  const std::size_t w = in.windows;
+  const WindowRows rows(w);
+  for (std::size_t c = 0; c < in.channels.size(); ++c) {
+    std::vector<double> y(w);
+    for (std::size_t j = 0; j < w; ++j) y[j] = in.residuals[c * w + j] / in.sigma[c * w + j];
+    jumps_test(in.channels[c], y, out);
+    out.push_back(trend_test(in, c, y, rows));
+    wheel_periodic_tests(in, c, y, rows, out);
+  }
+  world_drift_test(in, out);
   std::sort(out.begin(), out.end(),
             [](const MisfitTest& a, const MisfitTest& b) { return a.z > b.z; });
   return out;

@@ -299,11 +299,10 @@ std::vector<FittedEffect> GapResult::named() const {
   return out;
 }
 
-GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOptions& options) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  GapResult result;
-  result.options = options;
-  result.nominal = nominal;
+namespace {
+
+// The run as the report shows it: its motion capture, phases and windows.
+void record_run(const RunData& run, const SensorReplay& sensors, GapResult& result) {
   result.run_source = run.source;
   result.t_s = run.t_s;
   for (std::size_t k = 0; k < run.size(); ++k) {
@@ -311,8 +310,6 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
         Pose2{run.truth_x_m[k], run.truth_y_m[k], run.truth_yaw_rad[k]});
   }
   if (run.has_commands) result.segments = phase_segments(classify_phases(run.commands()), run.t_s);
-
-  const SensorReplay sensors(nominal, run, options.window_s);
   if (!sensors.uses_gyro()) {
     result.notes.emplace_back(
         "The run has no gyro: the dead reckoning takes its heading from the encoders, and the "
@@ -324,23 +321,122 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
         "the motion capture's time offset is fitted, and sensor_latency, which this question "
         "cannot tell from it, is not a candidate.");
   }
-  const std::vector<Window>& windows = sensors.windows();
-  const std::size_t w = windows.size();
+  const std::size_t w = sensors.windows().size();
   if (w < 10) {
     throw std::invalid_argument(
         "run " + run.source + " gives " + std::to_string(w) + " windows of " +
-        std::to_string(options.window_s) +
+        std::to_string(result.options.window_s) +
         " s with motion capture at both ends; the workflow needs at least 10");
   }
+  for (std::size_t j = 0; j < w; ++j) result.window_start_s.push_back(sensors.motion().start_s[j]);
+}
+
+// The sensor question's candidates this run can tell apart; a note for each one left out
+// for a reason the run shows.
+std::vector<Candidate> sensor_candidates(const RobotModel& nominal, const RunData& run,
+                                         const SensorReplay& sensors, const MotionPeaks& peaks,
+                                         std::vector<std::string>& notes) {
+  std::vector<Candidate> library = candidate_library(nominal, Question::kSensorToPose, peaks);
+  if (sensors.fits_body_offset() && nominal.drivetrain == DrivetrainKind::kSwpc) {
+    notes.emplace_back(
+        "The tracked body's yaw offset is fitted (the log does not declare `# truth_frame: "
+        "robot`): on an SWPC robot it trades against the part of the steering offsets common to "
+        "every module, which only turning separates; a steering offset is fixed mainly in its "
+        "differences between modules.");
+  }
+  const bool turns_of_one_kind = turn_kind_spread(run) < kMinSpinShareSpread;
+  if (turns_of_one_kind && nominal.drivetrain == DrivetrainKind::kDifferential) {
+    notes.emplace_back(
+        "The run turns in one way only (on the spot, or on arcs of one kind): a turn-dependent "
+        "track (track_scrub) cannot be told from a track width, and is not a candidate.");
+  }
+  const bool radius_hidden_by_lever_arm = sensors.fits_body_offset() && drives_one_circle(run);
+  if (radius_hidden_by_lever_arm) {
+    notes.emplace_back(
+        "The run drives one circle and the tracked body's lever arm is fitted: a common "
+        "wheel-radius scale changes the circle's radius as the lever arm does, and a left/right "
+        "radius difference its heading per metre as a track width does, so wheel_radius is not a "
+        "candidate (track_width is). Runs with straight driving or other turns fix the radii.");
+  }
+  std::erase_if(library, [&](const Candidate& c) {
+    const bool gyro = c.name == "gyro_bias" || c.name == "gyro_scale";
+    return (gyro && !sensors.uses_gyro()) ||
+           (c.name == "sensor_latency" && sensors.fits_time_offset()) ||
+           (c.name == "track_scrub" && turns_of_one_kind) ||
+           (c.name == "wheel_radius" && radius_hidden_by_lever_arm);
+  });
+  return library;
+}
+
+// The command question: each wheel's and steering angle's change over the windows, replayed
+// from the commands (`commands` must outlive the replay).
+QuestionReplay command_question_replay(const CommandReplay& commands, const SensorReplay& sensors,
+                                       const RobotModel& nominal, const RunData& run) {
+  const std::vector<Window>& windows = sensors.windows();
+  const std::size_t w = windows.size();
   const WindowMotion& motion = sensors.motion();
-  for (std::size_t j = 0; j < w; ++j) result.window_start_s.push_back(motion.start_s[j]);
   std::vector<double> steer_sq(w);
   for (std::size_t j = 0; j < w; ++j)
     steer_sq[j] = motion.steer_travel_rad[j] * motion.steer_travel_rad[j];
   const std::vector<double> travel_sq = squared_wheel_travel(motion);
-  const std::vector<double> accel = window_acceleration(motion);
-  std::vector<double> start_yaw(w);
-  for (std::size_t j = 0; j < w; ++j) start_yaw[j] = sensors.anchors_start()[j].yaw_rad;
+  QuestionReplay cq;
+  cq.channels = commands.channels();
+  cq.windows = w;
+  cq.residuals = [&commands](const RobotModel& model, std::span<const double> nuisance,
+                             std::vector<double>& out, std::size_t window_limit) {
+    return commands.residuals(model, nuisance.empty() ? 0.0 : nuisance[0], out, window_limit);
+  };
+  const double row = commands.row_period_s();
+  cq.nuisance.push_back({"command_delay_s", 0.0, row, -CommandReplay::kMaxCommandDelayRows * row,
+                         CommandReplay::kMaxCommandDelayRows * row});
+  cq.own_change.resize(cq.channels.size() * w);
+  for (std::size_t c = 0; c < cq.channels.size(); ++c) {
+    const ChannelInfo& info = cq.channels[c];
+    const bool steer = info.kind == ChannelKind::kSteerAngle;
+    const std::vector<double>& angle =
+        steer ? run.steer_rad[info.module] : run.wheel_rad[info.module];
+    cq.noise_x.push_back(steer ? steer_sq : travel_sq);
+    cq.noise_floor.push_back(count_floor(steer ? nominal.sensors.steering_encoder_counts_per_rev
+                                               : nominal.sensors.wheel_encoder_counts_per_rev));
+    for (std::size_t j = 0; j < w; ++j)
+      cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
+  }
+  cq.known_variance_of = [&commands](const RobotModel& model, std::span<const double> nuisance) {
+    return commands.timing_variance(model, nuisance.empty() ? 0.0 : nuisance[0]);
+  };
+  cq.accel = window_acceleration(motion);
+  for (std::size_t j = 0; j < w; ++j)
+    cq.start_yaw_rad.push_back(sensors.anchors_start()[j].yaw_rad);
+  cq.wheel_sin_change = motion.wheel_sin_change;
+  cq.wheel_cos_change = motion.wheel_cos_change;
+  return cq;
+}
+
+// Question 2, command to motion, from `command_base` (what the sensors named).
+void analyse_commands(const RobotModel& nominal, const RunData& run, const SensorReplay& sensors,
+                      const std::vector<Pose2>& robot_path, const MotionPeaks& peaks,
+                      const RobotModel& command_base, GapResult& result) {
+  const CommandReplay commands(nominal, run, sensors, robot_path);
+  const QuestionReplay cq = command_question_replay(commands, sensors, nominal, run);
+  result.command = analyse_question(
+      Question::kCommandToMotion, command_base, cq,
+      candidate_library(command_base, Question::kCommandToMotion, peaks, commands.row_period_s()),
+      result.options.question);
+  result.command_delay_s = result.command.nuisance.empty() ? 0.0 : result.command.nuisance[0];
+  if (result.command.verdict == Verdict::kNamed) result.augmented = result.command.augmented;
+  commands.path(nominal, result.command_delay_s, result.replay_before);
+  commands.path(result.augmented, result.command_delay_s, result.replay_after);
+}
+
+}  // namespace
+
+GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  GapResult result;
+  result.options = options;
+  result.nominal = nominal;
+  const SensorReplay sensors(nominal, run, options.window_s);
+  record_run(run, sensors, result);
 
   // Question 1: sensor to pose.
   const QuestionReplay sq = sensor_question_replay(sensors, nominal);
@@ -349,36 +445,8 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   std::vector<Pose2> robot_path;
   sensors.path(sim::resolve_plant(nominal), TruthNuisance{}, robot_path);
   const MotionPeaks peaks = motion_peaks(run, robot_path);
-  std::vector<Candidate> sensor_library =
-      candidate_library(nominal, Question::kSensorToPose, peaks);
-  if (sensors.fits_body_offset() && nominal.drivetrain == DrivetrainKind::kSwpc) {
-    result.notes.emplace_back(
-        "The tracked body's yaw offset is fitted (the log does not declare `# truth_frame: "
-        "robot`): on an SWPC robot it trades against the part of the steering offsets common to "
-        "every module, which only turning separates; a steering offset is fixed mainly in its "
-        "differences between modules.");
-  }
-  const bool turns_of_one_kind = turn_kind_spread(run) < kMinSpinShareSpread;
-  if (turns_of_one_kind && nominal.drivetrain == DrivetrainKind::kDifferential) {
-    result.notes.emplace_back(
-        "The run turns in one way only (on the spot, or on arcs of one kind): a turn-dependent "
-        "track (track_scrub) cannot be told from a track width, and is not a candidate.");
-  }
-  const bool radius_hidden_by_lever_arm = sensors.fits_body_offset() && drives_one_circle(run);
-  if (radius_hidden_by_lever_arm) {
-    result.notes.emplace_back(
-        "The run drives one circle and the tracked body's lever arm is fitted: a common "
-        "wheel-radius scale changes the circle's radius as the lever arm does, and a left/right "
-        "radius difference its heading per metre as a track width does, so wheel_radius is not a "
-        "candidate (track_width is). Runs with straight driving or other turns fix the radii.");
-  }
-  std::erase_if(sensor_library, [&](const Candidate& c) {
-    const bool gyro = c.name == "gyro_bias" || c.name == "gyro_scale";
-    return (gyro && !sensors.uses_gyro()) ||
-           (c.name == "sensor_latency" && sensors.fits_time_offset()) ||
-           (c.name == "track_scrub" && turns_of_one_kind) ||
-           (c.name == "wheel_radius" && radius_hidden_by_lever_arm);
-  });
+  const std::vector<Candidate> sensor_library =
+      sensor_candidates(nominal, run, sensors, peaks, result.notes);
   result.sensor =
       analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, options.question);
   result.truth = sensors.truth(result.sensor.nuisance);
@@ -395,43 +463,7 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   result.command_assessed = !options.sensor_only && run.has_commands;
   result.augmented = command_base;
   if (result.command_assessed) {
-    const CommandReplay commands(nominal, run, sensors, robot_path);
-    QuestionReplay cq;
-    cq.channels = commands.channels();
-    cq.windows = w;
-    cq.residuals = [&commands](const RobotModel& model, std::span<const double> nuisance,
-                               std::vector<double>& out, std::size_t window_limit) {
-      return commands.residuals(model, nuisance.empty() ? 0.0 : nuisance[0], out, window_limit);
-    };
-    const double row = commands.row_period_s();
-    cq.nuisance.push_back({"command_delay_s", 0.0, row, -CommandReplay::kMaxCommandDelayRows * row,
-                           CommandReplay::kMaxCommandDelayRows * row});
-    cq.own_change.resize(cq.channels.size() * w);
-    for (std::size_t c = 0; c < cq.channels.size(); ++c) {
-      const ChannelInfo& info = cq.channels[c];
-      const bool steer = info.kind == ChannelKind::kSteerAngle;
-      const std::vector<double>& angle =
-          steer ? run.steer_rad[info.module] : run.wheel_rad[info.module];
-      cq.noise_x.push_back(steer ? steer_sq : travel_sq);
-      cq.noise_floor.push_back(count_floor(steer ? nominal.sensors.steering_encoder_counts_per_rev
-                                                 : nominal.sensors.wheel_encoder_counts_per_rev));
-      for (std::size_t j = 0; j < w; ++j)
-        cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
-    }
-    cq.known_variance_of = [&commands](const RobotModel& model, std::span<const double> nuisance) {
-      return commands.timing_variance(model, nuisance.empty() ? 0.0 : nuisance[0]);
-    };
-    cq.accel = accel;
-    cq.start_yaw_rad = start_yaw;
-    cq.wheel_sin_change = motion.wheel_sin_change;
-    cq.wheel_cos_change = motion.wheel_cos_change;
-    result.command = analyse_question(
-        Question::kCommandToMotion, command_base, cq,
-        candidate_library(command_base, Question::kCommandToMotion, peaks, row), options.question);
-    result.command_delay_s = result.command.nuisance.empty() ? 0.0 : result.command.nuisance[0];
-    if (result.command.verdict == Verdict::kNamed) result.augmented = result.command.augmented;
-    commands.path(nominal, result.command_delay_s, result.replay_before);
-    commands.path(result.augmented, result.command_delay_s, result.replay_after);
+    analyse_commands(nominal, run, sensors, robot_path, peaks, command_base, result);
   } else {
     result.command.question = Question::kCommandToMotion;
     result.command.summary = run.has_commands
