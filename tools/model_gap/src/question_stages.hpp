@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The stages of analyse_question (question.hpp), each a function of its own:
+//   nominal      the nominal residual, the noise it shows, the nominal fit with its nuisance;
+//   screen       every candidate alone (a long run first on a shorter stretch);
+//   select       the best significant single effect, then a second one if it earns its place;
+//   refit        the selection again with the noise it leaves and its nuisance free;
+//   misfit       what remains, and the tests for what the library does not hold;
+//   verdict      no significant gap, named, or unexplained residual, and its summary.
+// What the stages share is QuestionState, passed from one to the next. Internal to the
+// model-gap library: the public interface is question.hpp.
+
+#include <cstddef>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "swivel/model_gap/fit.hpp"
+#include "swivel/model_gap/library.hpp"
+#include "swivel/model_gap/misfit.hpp"
+#include "swivel/model_gap/noise_model.hpp"
+#include "swivel/model_gap/question.hpp"
+#include "swivel/robot_model.hpp"
+
+namespace swivel::model_gap::detail {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Every window of the run (Evaluator::set_window_limit).
+inline constexpr std::size_t kAllWindows = static_cast<std::size_t>(-1);
+
+/// `base` with `effects` applied, their fit-unit values one after the other in `theta`.
+RobotModel model_with(const RobotModel& base, const std::vector<const Candidate*>& effects,
+                      std::span<const double> theta);
+
+/// The residual function of a set of effects on the question's base model: whitened rows,
+/// the effects' parameters first, then the nuisance parameters when they are fitted (else
+/// their fixed values).
+class Evaluator {
+ public:
+  Evaluator(const RobotModel& base, const QuestionReplay& replay);
+
+  void set_sigma(std::vector<double> sigma) { sigma_ = std::move(sigma); }
+  [[nodiscard]] const std::vector<double>& sigma() const { return sigma_; }
+  /// Windows replayed (the rest read NaN): a shorter stretch for screening.
+  void set_window_limit(std::size_t limit) { limit_ = limit; }
+  /// Values of the nuisance parameters when a fit leaves them out.
+  void set_nuisance(std::vector<double> values) { nuisance_ = std::move(values); }
+  [[nodiscard]] const std::vector<double>& nuisance() const { return nuisance_; }
+
+  [[nodiscard]] FitProblem problem(const std::vector<const Candidate*>& effects,
+                                   bool fit_nuisance) const;
+  /// Residuals in channel units (whiten = false) or whitened.
+  bool evaluate(const std::vector<const Candidate*>& effects, std::span<const double> theta,
+                bool fit_nuisance, std::vector<double>& r, bool whiten) const;
+  [[nodiscard]] RobotModel model_with(const std::vector<const Candidate*>& effects,
+                                      std::span<const double> theta) const {
+    return detail::model_with(base_, effects, theta);
+  }
+
+ private:
+  const RobotModel& base_;
+  const QuestionReplay& replay_;
+  std::vector<double> sigma_;
+  std::vector<double> nuisance_;
+  std::size_t limit_ = kAllWindows;
+  mutable RobotModel model_;
+  mutable std::vector<double> raw_;
+};
+
+/// One candidate (a single effect or a pair) as fitted.
+struct Fitted {
+  std::vector<const Candidate*> effects;
+  FitOutcome fit;
+  std::vector<double> z;     ///< per effect: significance
+  std::vector<double> size;  ///< per effect: what it changes (contribution())
+  /// The nominal model on the same stretch (screening fits a shorter one).
+  double rss_reference = 0.0;
+  double bic_reference = 0.0;
+};
+
+/// The fit's BIC when it succeeded and `usable` (else infinite: last when sorting by BIC).
+inline double bic_or_last(const Fitted& f, bool usable) {
+  if (usable && f.fit.ok) return f.fit.bic;
+  return kInf;
+}
+
+/// What the stages share, from the nominal residual to the refitted selection.
+struct QuestionState {
+  QuestionState(const RobotModel& base, const QuestionReplay& given);
+  QuestionState(const QuestionState&) = delete;
+  QuestionState& operator=(const QuestionState&) = delete;
+  ~QuestionState() = default;
+
+  QuestionReplay replay;  ///< the given one, with its known variance measured
+  Evaluator eval;         ///< on `base` and `replay`
+  std::size_t windows = 0;
+  NoiseModel noise;
+  std::vector<double> residuals_before;  ///< channel-major, channel units
+  FitOutcome nominal_fixed;              ///< the nominal model, nuisance fixed, every window
+  std::vector<Fitted> singles;           ///< per library candidate
+  std::vector<char> full;                ///< per library candidate: fitted on every window
+  std::size_t screen = 0;                ///< windows of the screening stretch
+  std::vector<Fitted> pairs;
+  const Fitted* chosen = nullptr;  ///< in singles or pairs; none: nothing selected
+  Fitted final;                    ///< the selection refitted (the nominal model if none)
+};
+
+// --- Fitting toolkit (question_fit.cpp) ---
+
+/// How much an effect changes the prediction: the largest, over channels, RMS of the
+/// whitened residuals' change it brings (noise sigmas).
+double contribution(const FitOutcome& with, const FitOutcome& without, std::size_t windows);
+/// The effects' parameter specs (from `initial` where given), then the nuisance ones.
+std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
+                                const std::vector<double>& initial,
+                                const std::vector<ParamSpec>& nuisance,
+                                const std::vector<double>& nuisance_initial);
+/// Significance of the `count` parameters from `first` in a fit, against the same fit
+/// without them (`rss_without`), as a normal deviate.
+double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
+               const std::vector<double>& identity);
+/// The effects' part (the first p parameters) of a fit that had the nuisance free beside them.
+FitOutcome effects_part(FitOutcome joint, std::size_t p);
+std::size_t param_count(const std::vector<const Candidate*>& effects);
+CandidateScore score_of(const Fitted& f);
+/// Per row (channel-major), the noise sigma of the replay's windows.
+std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& replay);
+MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<double>& residuals,
+                           const std::vector<double>& sigma,
+                           const std::vector<double>& residuals_before);
+/// `effects` fitted from `initial` (the nuisance beside them when the replay asks for it).
+Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
+               const std::vector<double>& initial, const QuestionOptions& options);
+/// One candidate fitted, with its significance and size against `reference` (the nominal
+/// model on the same stretch).
+Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<double>& initial,
+                  const FitOutcome& reference, const QuestionOptions& options);
+
+// --- Selection (selection.cpp) ---
+
+/// Whether every effect of a fit is significant, large enough to matter, and further from
+/// the model's own values than the replay can resolve.
+bool significant(const Fitted& f, const QuestionOptions& options);
+/// The single effect to select: the best (by BIC) of those fitted on every window that is
+/// significant and better than the nominal model (`nominal_bic`); none: nullptr.
+const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
+                            double nominal_bic, const QuestionOptions& options);
+/// Whether the chosen effect leaves a pattern a second effect could take.
+bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options);
+/// The singles to try beside the chosen one, best first (by BIC against the nominal model on
+/// the stretch each was fitted on).
+std::vector<std::size_t> pair_order(const std::vector<Fitted>& singles);
+/// The best significant pair better than `chosen` (nullptr: none).
+const Fitted* choose_pair(const std::vector<Fitted>& pairs, const Fitted& chosen,
+                          const QuestionOptions& options);
+
+// --- Verdict (verdict.cpp) ---
+
+/// The first misfit test (most significant first) that makes the residual unexplained.
+const MisfitTest* counting_misfit(const std::vector<MisfitTest>& misfits,
+                                  const QuestionOptions& options);
+
+struct VerdictInputs {
+  Question question = Question::kSensorToPose;
+  const RobotModel* base = nullptr;
+  const std::vector<Fitted>* singles = nullptr;
+  const Fitted* chosen = nullptr;  ///< none: nothing selected
+  const Fitted* final = nullptr;   ///< the selection refitted
+};
+
+/// Sets result.verdict and result.summary from result.misfits and the selection, and when
+/// named, result.named and result.augmented.
+void give_verdict(const VerdictInputs& in, const QuestionOptions& options, QuestionResult& result);
+
+// --- The stages (question.cpp) ---
+
+void measure_nominal(QuestionState& s, Question question);
+void fit_nominal(QuestionState& s, const QuestionOptions& options);
+void screen_singles(QuestionState& s, const std::vector<Candidate>& library,
+                    const QuestionOptions& options);
+void select_effects(QuestionState& s, const std::vector<Candidate>& library,
+                    const QuestionOptions& options);
+void refit_selection(QuestionState& s, const QuestionOptions& options);
+void measure_misfit(const QuestionState& s, QuestionResult& result);
+
+}  // namespace swivel::model_gap::detail

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+// Selection of the question's effects by forward steps (question_stages.hpp): the best
+// significant single effect, then a second one only if it is significant in the pair.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "question_stages.hpp"
+
+namespace swivel::model_gap::detail {
+namespace {
+
+// Whether effect e of a fit is further from the model's own values than the replay can
+// resolve (a lag, a limit).
+bool resolved(const Fitted& f, std::size_t e, const QuestionOptions& options) {
+  std::size_t first = 0;
+  for (std::size_t k = 0; k < e; ++k) first += f.effects[k]->params.size();
+  const Candidate& c = *f.effects[e];
+  double chi2 = 0.0;
+  double count = 0.0;
+  for (std::size_t i = 0; i < c.params.size(); ++i) {
+    const double value = f.fit.values[first + i];
+    const double resolution = c.fit_resolution(i, value);
+    if (resolution <= 0.0) continue;
+    const double sigma = std::hypot(
+        std::isfinite(f.fit.sigmas[first + i]) ? f.fit.sigmas[first + i] : 0.0, resolution);
+    chi2 += std::pow((value - c.identity[i]) / sigma, 2);
+    count += 1.0;
+  }
+  return count == 0.0 || chi_square_z(chi2, count) >= options.min_z_name;
+}
+
+}  // namespace
+
+bool significant(const Fitted& f, const QuestionOptions& options) {
+  if (!f.fit.ok) return false;
+  for (std::size_t e = 0; e < f.z.size(); ++e) {
+    if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size ||
+        !resolved(f, e, options))
+      return false;
+  }
+  return true;
+}
+
+const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
+                            double nominal_bic, const QuestionOptions& options) {
+  std::vector<std::size_t> order(singles.size());
+  std::iota(order.begin(), order.end(), 0U);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return bic_or_last(singles[a], full[a] != 0) < bic_or_last(singles[b], full[b] != 0);
+  });
+  for (std::size_t k : order) {
+    if (full[k] != 0 && significant(singles[k], options) && singles[k].fit.bic < nominal_bic)
+      return &singles[k];
+  }
+  return nullptr;
+}
+
+bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options) {
+  return std::any_of(left.begin(), left.end(), [&](const MisfitTest& m) {
+    return m.test != "jumps" && m.z >= options.min_z_name && m.size >= options.min_effect_size;
+  });
+}
+
+std::vector<std::size_t> pair_order(const std::vector<Fitted>& singles) {
+  std::vector<std::size_t> pool(singles.size());
+  std::iota(pool.begin(), pool.end(), 0U);
+  std::sort(pool.begin(), pool.end(), [&](std::size_t a, std::size_t b) {
+    return (singles[a].fit.ok ? singles[a].fit.bic - singles[a].bic_reference : kInf) <
+           (singles[b].fit.ok ? singles[b].fit.bic - singles[b].bic_reference : kInf);
+  });
+  return pool;
+}
+
+const Fitted* choose_pair(const std::vector<Fitted>& pairs, const Fitted& chosen,
+                          const QuestionOptions& options) {
+  const Fitted* best_pair = nullptr;
+  for (const Fitted& p : pairs) {
+    if (!significant(p, options) || p.fit.bic >= chosen.fit.bic) continue;
+    if (best_pair == nullptr || p.fit.bic < best_pair->fit.bic) best_pair = &p;
+  }
+  return best_pair;
+}
+
+}  // namespace swivel::model_gap::detail

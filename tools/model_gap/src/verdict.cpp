@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: Apache-2.0
+// The question's verdict (question_stages.hpp): unexplained residual when a misfit test
+// fires, no significant gap when nothing was selected, else the selection named.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "question_stages.hpp"
+
+namespace swivel::model_gap::detail {
+namespace {
+
+std::string fmt(double v, int precision = 3) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+std::string unexplained_summary(const VerdictInputs& in, const MisfitTest& m,
+                                const std::string& title) {
+  std::string best = "none";
+  if (in.chosen != nullptr)
+    best = score_of(*in.final).label() + " (named nothing: it leaves this behind)";
+  return "Unexplained residual (" + title + "): " + m.channel + " " + m.label + " (" + fmt(m.z, 3) +
+         " sigma, " + fmt(m.size, 2) + " noise sigmas) after the best library candidate " + best +
+         ".";
+}
+
+std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& options,
+                           const std::string& title) {
+  double best_z = 0.0;
+  std::string best = "none";
+  for (const Fitted& f : *in.singles) {
+    if (!f.fit.ok || f.z.empty()) continue;
+    if (f.z[0] > best_z) {
+      best_z = f.z[0];
+      best = f.effects[0]->name;
+    }
+  }
+  return "No significant gap (" + title +
+         "): the model agrees with the run to within its noise "
+         "(most significant candidate " +
+         best + " at " + fmt(best_z, 2) + " sigma, below " + fmt(options.min_z_name, 2) +
+         ", or too small to matter).";
+}
+
+// Effect e of the refitted selection, its parameters from `first` on (`s`: its score).
+FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::size_t e,
+                           std::size_t first) {
+  const Candidate& c = *final.effects[e];
+  FittedEffect fe;
+  fe.name = c.name;
+  fe.limits = c.target == Candidate::Target::kLimits;
+  fe.keys = c.keys;
+  fe.z = e < final.z.size() ? final.z[e] : 0.0;
+  fe.inverse = c.inverse;
+  const std::size_t m = c.params.size();
+  const std::size_t p = final.fit.values.size();
+  fe.fit_covariance.assign(m * m, 0.0);
+  std::size_t i = first;
+  for (std::size_t k = 0; k < m; ++k, ++i) {
+    fe.values.push_back(s.values[i]);
+    fe.sigmas.push_back(s.sigmas[i]);
+    fe.fit_values.push_back(final.fit.values[i]);
+    for (std::size_t l = 0; l < m; ++l) {
+      fe.fit_covariance[k * m + l] =
+          final.fit.covariance.empty() ? 0.0 : final.fit.covariance[(first + k) * p + first + l];
+    }
+    const double res = c.fit_resolution(k, final.fit.values[i]);
+    fe.fit_covariance[k * m + k] += res * res;
+    const double partial = std::sqrt(std::max(fe.fit_covariance[k * m + k], 0.0));
+    fe.partial_sigmas.push_back(c.inverse[k] != 0 ? c.sigma(k, final.fit.values[i], partial)
+                                                  : partial);
+  }
+  std::vector<double> zero(m, 0.0);
+  (void)mahalanobis_squared(zero, fe.fit_covariance, fe.observable_combinations);
+  return fe;
+}
+
+void name_selection(const VerdictInputs& in, const std::string& title, QuestionResult& result) {
+  const Fitted& final = *in.final;
+  const CandidateScore s = score_of(final);
+  std::size_t first = 0;
+  for (std::size_t e = 0; e < final.effects.size(); ++e) {
+    result.named.push_back(fitted_effect(final, s, e, first));
+    first += final.effects[e]->params.size();
+  }
+  result.augmented = model_with(*in.base, final.effects, final.fit.values);
+  std::string zs;
+  for (const FittedEffect& fe : result.named) zs += (zs.empty() ? "" : ", ") + fmt(fe.z, 3);
+  std::string sizes;
+  for (double v : s.size) sizes += (sizes.empty() ? "" : ", ") + fmt(v, 3);
+  result.summary = "Named " + s.label() + " (" + title + "): significant at " + zs +
+                   " sigma, an RMS change of " + sizes +
+                   " noise sigmas; what remains shows no pattern.";
+}
+
+}  // namespace
+
+const MisfitTest* counting_misfit(const std::vector<MisfitTest>& misfits,
+                                  const QuestionOptions& options) {
+  const auto counts = [&](const MisfitTest& m) {
+    return m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
+  };
+  const auto first = std::find_if(misfits.begin(), misfits.end(), counts);
+  return first != misfits.end() ? &*first : nullptr;
+}
+
+void give_verdict(const VerdictInputs& in, const QuestionOptions& options, QuestionResult& result) {
+  const std::string title = question_title(in.question);
+  if (const MisfitTest* m = counting_misfit(result.misfits, options); m != nullptr) {
+    result.verdict = Verdict::kUnexplained;
+    result.summary = unexplained_summary(in, *m, title);
+  } else if (in.chosen == nullptr) {
+    result.verdict = Verdict::kNoSignificantGap;
+    result.summary = no_gap_summary(in, options, title);
+  } else {
+    result.verdict = Verdict::kNamed;
+    name_selection(in, title, result);
+  }
+}
+
+}  // namespace swivel::model_gap::detail

@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: Apache-2.0
+// The question's selection and verdict stages (src/question_stages.hpp) on hand-made fits:
+// which single effect is chosen, when a pair replaces it, which misfit makes the residual
+// unexplained, and what each verdict says.
+
+#include "question_stages.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace swivel::model_gap::detail {
+namespace {
+
+// One parameter "<name>.k" with identity 0 and `resolution` (fit units).
+Candidate candidate(const std::string& name, double resolution = 0.0) {
+  Candidate c;
+  c.name = name;
+  c.keys = {"k"};
+  ParamSpec p;
+  p.name = name + ".k";
+  c.params = {p};
+  c.identity = {0.0};
+  c.inverse = {0};
+  c.resolution = {resolution};
+  c.relative_resolution = {0.0};
+  return c;
+}
+
+Fitted fitted(const std::vector<const Candidate*>& effects, double bic, double z, double size) {
+  Fitted f;
+  f.effects = effects;
+  f.fit.ok = true;
+  f.fit.bic = bic;
+  f.fit.rss = 10.0;
+  f.fit.n = 100;
+  for (std::size_t e = 0; e < effects.size(); ++e) {
+    f.fit.values.push_back(1.0);
+    f.fit.sigmas.push_back(0.01);
+    f.z.push_back(z);
+    f.size.push_back(size);
+  }
+  f.rss_reference = 20.0;
+  f.bic_reference = 0.0;
+  return f;
+}
+
+MisfitTest misfit(const std::string& test, double z, double size) {
+  MisfitTest m;
+  m.test = test;
+  m.channel = "dx";
+  m.label = test + " pattern";
+  m.z = z;
+  m.size = size;
+  return m;
+}
+
+TEST(QuestionSelection, SignificantNeedsSizeSignificanceAndResolution) {
+  const QuestionOptions options;
+  const Candidate sharp = candidate("sharp");
+  const Candidate blurred = candidate("blurred", 1.0);  // as wide as the fitted change
+  EXPECT_TRUE(significant(fitted({&sharp}, -50.0, 8.0, 2.0), options));
+  EXPECT_FALSE(significant(fitted({&sharp}, -50.0, 4.9, 2.0), options));
+  EXPECT_FALSE(significant(fitted({&sharp}, -50.0, 8.0, 0.4), options));
+  EXPECT_FALSE(significant(fitted({&blurred}, -50.0, 8.0, 2.0), options));
+  Fitted failed = fitted({&sharp}, -50.0, 8.0, 2.0);
+  failed.fit.ok = false;
+  EXPECT_FALSE(significant(failed, options));
+}
+
+TEST(QuestionSelection, ChoosesTheBestSignificantFullyFittedSingle) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  const Candidate c = candidate("c");
+  const Candidate d = candidate("d");
+  const std::vector<Fitted> singles = {
+      fitted({&a}, -30.0, 8.0, 2.0),  // significant
+      fitted({&b}, -90.0, 8.0, 2.0),  // better, but only screened
+      fitted({&c}, -60.0, 3.0, 2.0),  // better, not significant
+      fitted({&d}, -40.0, 9.0, 1.0),  // the best significant one
+  };
+  const std::vector<char> full = {1, 0, 1, 1};
+  EXPECT_EQ(choose_single(singles, full, 0.0, options), &singles[3]);
+  // None better than the nominal model: nothing chosen.
+  EXPECT_EQ(choose_single(singles, full, -100.0, options), nullptr);
+  // The best significant one only screened: the next; none fully fitted: nothing chosen.
+  EXPECT_EQ(choose_single(singles, {1, 0, 1, 0}, 0.0, options), singles.data());
+  EXPECT_EQ(choose_single(singles, {0, 0, 1, 0}, 0.0, options), nullptr);
+}
+
+TEST(QuestionSelection, APairReplacesTheSingleOnlyWhenSignificantAndBetter) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  const Candidate c = candidate("c");
+  const Fitted chosen = fitted({&a}, -40.0, 8.0, 2.0);
+  std::vector<Fitted> pairs = {
+      fitted({&a, &b}, -45.0, 8.0, 2.0),
+      fitted({&a, &c}, -70.0, 8.0, 2.0),
+  };
+  pairs[1].z[1] = 2.0;  // c is not significant beside a
+  EXPECT_EQ(choose_pair(pairs, chosen, options), pairs.data());
+  pairs[0].fit.bic = -40.0;  // no better than a alone
+  EXPECT_EQ(choose_pair(pairs, chosen, options), nullptr);
+}
+
+TEST(QuestionSelection, PairsAreTriedBestFirstAndOnlyForAPatternLeft) {
+  const Candidate a = candidate("a");
+  std::vector<Fitted> singles = {fitted({&a}, -10.0, 8.0, 2.0), fitted({&a}, -30.0, 8.0, 2.0),
+                                 fitted({&a}, -50.0, 8.0, 2.0)};
+  singles[1].bic_reference = -40.0;  // screened: +10 against its own stretch
+  singles[2].fit.ok = false;
+  EXPECT_EQ(pair_order(singles), (std::vector<std::size_t>{0, 1, 2}));
+
+  const QuestionOptions options;
+  EXPECT_FALSE(pattern_left({misfit("jumps", 20.0, 3.0)}, options));
+  EXPECT_FALSE(pattern_left({misfit("heading", 4.0, 3.0), misfit("speed", 20.0, 0.3)}, options));
+  EXPECT_TRUE(pattern_left({misfit("jumps", 20.0, 3.0), misfit("heading", 6.0, 0.6)}, options));
+}
+
+TEST(QuestionVerdict, AMisfitCountsWhenSignificantAndAsLargeAsTheNoise) {
+  const QuestionOptions options;
+  const std::vector<MisfitTest> quiet = {misfit("speed", 20.0, 0.9), misfit("heading", 4.0, 3.0)};
+  EXPECT_EQ(counting_misfit(quiet, options), nullptr);
+  const std::vector<MisfitTest> loud = {misfit("speed", 20.0, 0.9), misfit("heading", 6.0, 1.5),
+                                        misfit("accel", 30.0, 5.0)};
+  EXPECT_EQ(counting_misfit(loud, options), &loud[1]);
+}
+
+TEST(QuestionVerdict, UnexplainedWhenAMisfitCountsWhateverWasSelected) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const std::vector<Fitted> singles = {fitted({&a}, -40.0, 8.0, 2.0)};
+  const Fitted final = fitted({&a}, -42.0, 8.0, 2.0);
+  const RobotModel base;
+  QuestionResult result;
+  result.misfits = {misfit("heading", 12.0, 2.5)};
+  give_verdict({Question::kSensorToPose, &base, &singles, singles.data(), &final}, options, result);
+  EXPECT_EQ(result.verdict, Verdict::kUnexplained);
+  EXPECT_TRUE(result.named.empty());
+  EXPECT_NE(result.summary.find("dx heading pattern (12 sigma, 2.5 noise sigmas)"),
+            std::string::npos)
+      << result.summary;
+  EXPECT_NE(result.summary.find("candidate a (named nothing"), std::string::npos) << result.summary;
+}
+
+TEST(QuestionVerdict, NoSignificantGapNamesTheMostSignificantSingle) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  const std::vector<Fitted> singles = {fitted({&a}, -5.0, 2.5, 0.2), fitted({&b}, -3.0, 3.5, 0.1)};
+  const Fitted final;
+  const RobotModel base;
+  QuestionResult result;
+  result.misfits = {misfit("heading", 3.0, 2.5)};
+  give_verdict({Question::kSensorToPose, &base, &singles, nullptr, &final}, options, result);
+  EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
+  EXPECT_NE(result.summary.find("most significant candidate b at 3.5 sigma, below 5"),
+            std::string::npos)
+      << result.summary;
+}
+
+TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
+  const QuestionOptions options;
+  Candidate bias = candidate("gyro_bias", 0.003);
+  bias.keys = {"bias_rad_s"};
+  const std::vector<Fitted> singles = {fitted({&bias}, -40.0, 8.0, 2.0)};
+  Fitted final = fitted({&bias}, -41.0, 7.5, 1.8);
+  final.fit.values = {0.02};
+  final.fit.sigmas = {0.004};
+  final.fit.covariance = {0.004 * 0.004};
+  const RobotModel base;
+  QuestionResult result;
+  give_verdict({Question::kSensorToPose, &base, &singles, singles.data(), &final}, options, result);
+  ASSERT_EQ(result.verdict, Verdict::kNamed);
+  ASSERT_EQ(result.named.size(), 1U);
+  const FittedEffect& fe = result.named[0];
+  EXPECT_EQ(fe.name, "gyro_bias");
+  EXPECT_DOUBLE_EQ(fe.z, 7.5);
+  EXPECT_DOUBLE_EQ(fe.values[0], 0.02);
+  EXPECT_DOUBLE_EQ(fe.sigmas[0], 0.005);  // statistical and resolution in quadrature
+  EXPECT_DOUBLE_EQ(fe.partial_sigmas[0], 0.005);
+  EXPECT_EQ(fe.observable_combinations, 1U);
+  EXPECT_DOUBLE_EQ(result.augmented.effects.at("gyro_bias").at("bias_rad_s"), 0.02);
+  EXPECT_EQ(result.summary.rfind("Named gyro_bias (", 0), 0U) << result.summary;
+  EXPECT_NE(result.summary.find("significant at 7.5 sigma, an RMS change of 1.8 noise sigmas"),
+            std::string::npos)
+      << result.summary;
+}
+
+}  // namespace
+}  // namespace swivel::model_gap::detail
