@@ -1,11 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 #include <time.h>
 
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <mutex>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -68,7 +73,7 @@ struct Client {
     const QosPtr qos = default_qos(depth);
     return check(dds_create_reader(participant.handle(), topic, qos.get(), nullptr), "reader");
   }
-  dds_entity_t writer(const dds_topic_descriptor_t* desc, const std::string& name) {
+  dds_entity_t writer(const dds_topic_descriptor_t* desc, const std::string& name) const {
     const dds_entity_t topic = create_topic(participant.handle(), desc, name.c_str());
     const QosPtr qos = default_qos(10);
     return check(dds_create_writer(participant.handle(), topic, qos.get(), nullptr), "writer");
@@ -90,7 +95,10 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   bridge.start();
 
   swivel_msg_RobotState got{};
-  std::string id, plugin, fault, detail;
+  std::string id;
+  std::string plugin;
+  std::string fault;
+  std::string detail;
   ASSERT_TRUE(wait_for([&] {
     return take_one<swivel_msg_RobotState>(state_reader,
                                            [&](const swivel_msg_RobotState& s) {
@@ -102,7 +110,7 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
                                            }) &&
            id == robot;
   })) << "no RobotState within 10 s";
-  EXPECT_GT(got.cycle, 0u);
+  EXPECT_GT(got.cycle, 0U);
   EXPECT_NEAR(got.stamp_s, swivel::monotonic_s(), 5.0);
   EXPECT_EQ(got.ros_stamp_sec, 1'700'000'000);
   EXPECT_EQ(got.ros_stamp_nanosec, 250'000'001U);
@@ -122,12 +130,12 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
   EXPECT_DOUBLE_EQ(got.cmd_wz_radps, 0.12);
   EXPECT_DOUBLE_EQ(got.gyro_wz_radps, 0.11);
   EXPECT_EQ(plugin, "kalman");
-  EXPECT_EQ(got.localization_swaps, 2u);
+  EXPECT_EQ(got.localization_swaps, 2U);
   EXPECT_EQ(got.mode, swivel_msg_LOOP_MODE_VELOCITY);
   EXPECT_EQ(got.fault_code, static_cast<std::uint16_t>(FaultCode::kCommandTimeout));
   EXPECT_EQ(fault, "command_timeout");
   EXPECT_EQ(detail, "velocity command timed out");
-  EXPECT_EQ(got.fault_count, 3u);
+  EXPECT_EQ(got.fault_count, 3U);
   EXPECT_FALSE(got.has_truth);
 
   std::vector<swivel_msg_ModuleState> modules;
@@ -141,7 +149,7 @@ TEST(DdsBridge, PublishesTheLoopSnapshotAsRobotStateAndModuleStates) {
                }) &&
            modules_id == robot;
   })) << "no ModuleStates within 10 s";
-  ASSERT_EQ(modules.size(), 2u);
+  ASSERT_EQ(modules.size(), 2U);
   EXPECT_DOUBLE_EQ(modules[0].wheel_rate_cmd_radps, 3.0);
   EXPECT_DOUBLE_EQ(modules[1].wheel_rate_meas_radps, 3.9);
 }
@@ -160,7 +168,7 @@ TEST(DdsBridge, PublishesNothingNewWhileTheLoopStalls) {
   // 30 publish periods at 100 Hz: a bridge that republished would have written many.
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
 
-  EXPECT_EQ(bridge.counters().states_published, 1u);
+  EXPECT_EQ(bridge.counters().states_published, 1U);
 }
 
 TEST(DdsBridge, PassesVelocityCommandsForThisRobotOnly) {
@@ -199,14 +207,14 @@ TEST(DdsBridge, PassesVelocityCommandsForThisRobotOnly) {
     return !received.empty();
   })) << "no command reached on_command within 10 s";
   const std::scoped_lock lock(mutex);
-  ASSERT_EQ(received.size(), 1u);
+  ASSERT_EQ(received.size(), 1U);
   EXPECT_DOUBLE_EQ(received[0].twist.vx_mps, 0.4);
   EXPECT_DOUBLE_EQ(received[0].twist.vy_mps, 0.1);
   EXPECT_DOUBLE_EQ(received[0].twist.wz_radps, -0.3);
   EXPECT_NEAR(received[0].received_s, swivel::monotonic_s(), 5.0);
-  EXPECT_EQ(received[0].sequence, 1u);
-  EXPECT_EQ(bridge.counters().commands_ignored, 1u);
-  EXPECT_EQ(bridge.counters().commands_received, 1u);
+  EXPECT_EQ(received[0].sequence, 1U);
+  EXPECT_EQ(bridge.counters().commands_ignored, 1U);
+  EXPECT_EQ(bridge.counters().commands_received, 1U);
 }
 
 TEST(DdsBridge, CountsCommandsTheLoopCannotQueueAsDropped) {
@@ -227,7 +235,7 @@ TEST(DdsBridge, CountsCommandsTheLoopCannotQueueAsDropped) {
   ASSERT_EQ(dds_write(writer, &command), DDS_RETCODE_OK);
 
   ASSERT_TRUE(wait_for([&] { return bridge.counters().commands_dropped == 1; }));
-  EXPECT_EQ(bridge.counters().commands_received, 0u);
+  EXPECT_EQ(bridge.counters().commands_received, 0U);
 }
 
 TEST(DdsBridge, PassesMotionCaptureAndRequests) {
@@ -265,7 +273,8 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
   ASSERT_EQ(dds_write(mocap, &m), DDS_RETCODE_OK);
   m.stamp_s = 0.0;  // "at reception"
   ASSERT_EQ(dds_write(mocap, &m), DDS_RETCODE_OK);
-  std::string verb = "reload", argument;
+  std::string verb = "reload";
+  std::string argument;
   swivel_msg_Request r{};
   r.robot_id = own.data();
   r.verb = verb.data();
@@ -286,7 +295,7 @@ TEST(DdsBridge, PassesMotionCaptureAndRequests) {
   EXPECT_NEAR(captures[1].stamp_s, swivel::monotonic_s(), 5.0);
   EXPECT_EQ(requests[0].verb, "reload");
   EXPECT_EQ(requests[0].argument, "");
-  EXPECT_EQ(requests[0].request_id, 5u);
+  EXPECT_EQ(requests[0].request_id, 5U);
 }
 
 // swivelctl set-pose's SetPose reaches on_set_pose with the sigmas as variances, and the
@@ -328,7 +337,7 @@ TEST(DdsBridge, DeliversSetPoseAndPublishesItsReply) {
   })) << "no SetPose reached on_set_pose within 10 s";
   {
     const std::scoped_lock lock(mutex);
-    EXPECT_EQ(poses[0].request_id, 77u);
+    EXPECT_EQ(poses[0].request_id, 77U);
     EXPECT_TRUE(poses[0].wants_reply);
     EXPECT_EQ(poses[0].pose.pose.y_m, -2.0);
     EXPECT_TRUE(poses[0].pose.has_covariance);
@@ -349,10 +358,10 @@ TEST(DdsBridge, DeliversSetPoseAndPublishesItsReply) {
       id = r.request_id;
     });
   })) << "no Reply within 10 s";
-  EXPECT_EQ(id, 77u);
+  EXPECT_EQ(id, 77U);
   EXPECT_FALSE(ok);
   EXPECT_EQ(text, "refused: negative variance");
-  EXPECT_EQ(bridge.counters().replies_published, 1u);
+  EXPECT_EQ(bridge.counters().replies_published, 1U);
 }
 
 TEST(DdsBridge, PublishesDiagnostics) {
@@ -385,7 +394,11 @@ TEST(DdsBridge, PublishesDiagnostics) {
   bridge.start();
 
   swivel_msg_Diagnostics got{};
-  std::string id, plugin, reload, fault, detail;
+  std::string id;
+  std::string plugin;
+  std::string reload;
+  std::string fault;
+  std::string detail;
   ASSERT_TRUE(wait_for([&] {
     return take_one<swivel_msg_Diagnostics>(reader,
                                             [&](const swivel_msg_Diagnostics& m) {
@@ -402,14 +415,47 @@ TEST(DdsBridge, PublishesDiagnostics) {
   EXPECT_DOUBLE_EQ(got.lateness.p99_us, 40.0);
   EXPECT_DOUBLE_EQ(got.cycle_time.p999_us, 20.0);
   EXPECT_DOUBLE_EQ(got.cycle_time.max_us, 31.0);
-  EXPECT_EQ(got.cycles, 12345u);
-  EXPECT_EQ(got.overruns, 2u);
+  EXPECT_EQ(got.cycles, 12345U);
+  EXPECT_EQ(got.overruns, 2U);
   EXPECT_EQ(fault, "hardware_error");
   EXPECT_EQ(detail, "sim: hardware not answering");
   EXPECT_EQ(plugin, "lsm");
-  EXPECT_EQ(got.reload_count, 1u);
+  EXPECT_EQ(got.reload_count, 1U);
   EXPECT_FALSE(got.last_reload_ok);
   EXPECT_EQ(reload, "swiveld.yaml:3:1: loop: unknown key");
+}
+
+// A publisher round that fails (here the diagnostics source throws) is counted every time
+// and logged at the 1st, 2nd, 4th, ... failure with its message; the publisher goes on.
+TEST(DdsBridge, CountsEveryPublishingFailureAndLogsItsMessage) {
+  const std::string robot = unique_robot_id("publish_failures");
+  FakeLoop loop;
+  DdsOptions options;
+  options.diagnostics_rate_hz = 100.0;
+  std::ostringstream log_text;
+  auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log_text);
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("captured", sink));
+  {
+    DdsBridge bridge(options, robot,
+                     {.read_state = [&](StateSnapshot& s) { return loop.read(s); },
+                      .read_diagnostics = []() -> DiagnosticsSample {
+                        throw std::runtime_error("diagnostics source gone");
+                      }});
+    bridge.start();
+    EXPECT_TRUE(wait_for([&] { return bridge.counters().publish_failures >= 5; }))
+        << bridge.counters().publish_failures << " failures counted";
+    bridge.stop();
+  }
+  spdlog::set_default_logger(previous);
+  const std::string text = log_text.str();
+  EXPECT_NE(text.find("dds: publishing failed (failure 1): diagnostics source gone"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("dds: publishing failed (failure 4): diagnostics source gone"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("(failure 3)"), std::string::npos) << "logged every failure: " << text;
 }
 
 TEST(DdsBridge, PublishesCalibrationResults) {
@@ -437,7 +483,7 @@ TEST(DdsBridge, PublishesCalibrationResults) {
         });
   }));
   EXPECT_EQ(status, "done");
-  ASSERT_EQ(modules.size(), 1u);
+  ASSERT_EQ(modules.size(), 1U);
   EXPECT_DOUBLE_EQ(modules[0].x_m, 0.215);
   EXPECT_DOUBLE_EQ(modules[0].sigma_x_m, 0.001);
 }

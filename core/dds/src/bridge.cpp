@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -175,14 +176,14 @@ DdsBridge::DdsBridge(DdsOptions options, std::string robot_id, DdsCallbacks call
     // effort) matches them.
     if (options_.ros2.publish_tf) {
       dds_->tf_writer =
-          writer(&tf2_msgs_msg_dds__TFMessage__desc, options_.ros2.tf_topic(), writer_qos.get());
+          writer(&tf2_msgs_msg_dds__TFMessage__desc, Ros2Options::tf_topic(), writer_qos.get());
     }
     if (!options_.ros2.wheel_joints.empty()) {
       dds_->joint_states_writer = writer(&sensor_msgs_msg_dds__JointState__desc,
                                          options_.ros2.joint_states_topic(), writer_qos.get());
     }
     dds_->ros2_diagnostics_writer = writer(&diagnostic_msgs_msg_dds__DiagnosticArray__desc,
-                                           options_.ros2.diagnostics_topic(), writer_qos.get());
+                                           Ros2Options::diagnostics_topic(), writer_qos.get());
     // Best effort so that teleop tools with either reliability match.
     const QosPtr cmd_vel_qos = best_effort_qos(10);
     dds_->cmd_vel_reader =
@@ -264,6 +265,7 @@ BridgeCounters DdsBridge::counters() const {
   c.motion_captures_received = motion_captures_received_.load();
   c.requests_received = requests_received_.load();
   c.replies_published = replies_published_.load();
+  c.publish_failures = publish_failures_.load();
   c.achieved_publish_rate_hz = achieved_publish_rate_hz_.load();
   if (dds_->sensors) c.sensors = dds_->sensors->counters();
   return c;
@@ -306,7 +308,6 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
   bool have_last = false;
   double due_stamp_s = 0.0;           // the next cycle to publish is the first stamped from here
   PublishClock::time_point due_at{};  // when it is due (epoch: any new cycle is)
-  bool warned = false;
   StateSnapshot snapshot;
   std::uint64_t newest_cycle = 0;  // the loop's, published or not
   PublishRateMeter rate(options_.publish_rate_hz);
@@ -360,8 +361,12 @@ void DdsBridge::publish_loop(const std::stop_token& stop) {
         }
       }
     } catch (const std::exception& e) {
-      if (!warned) spdlog::warn("dds: publishing failed: {}", e.what());
-      warned = true;
+      // Every failure is counted (diagnostics publish_failures); the log has the 1st, 2nd,
+      // 4th, 8th, ...: a lasting failure stays visible without flooding it.
+      const std::uint64_t failures = publish_failures_.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (std::has_single_bit(failures)) {
+        spdlog::warn("dds: publishing failed (failure {}): {}", failures, e.what());
+      }
     }
     if (callbacks_.read_diagnostics && next_diagnostics < next) next = next_diagnostics;
     dds_->wake.wait_until(lock, stop, next, [] { return false; });
@@ -617,6 +622,7 @@ void DdsBridge::publish_ros2_diagnostics(const DiagnosticsSample& d,
       {"commands_received", std::to_string(commands_received_.load(std::memory_order_relaxed))},
       {"commands_dropped", std::to_string(commands_dropped_.load(std::memory_order_relaxed))},
       {"commands_stale", std::to_string(commands_stale_.load(std::memory_order_relaxed))},
+      {"publish_failures", std::to_string(publish_failures_.load(std::memory_order_relaxed))},
       {"reload_count", std::to_string(d.reload_count)},
       {"last_reload", d.last_reload_result},
       {"restart_required", d.restart_required ? "true" : "false"},

@@ -133,6 +133,8 @@ struct BridgeCounters {
   std::uint64_t motion_captures_received = 0;
   std::uint64_t requests_received = 0;  ///< Request and SetPose (initialpose included)
   std::uint64_t replies_published = 0;
+  /// Publisher rounds that failed (logged at the 1st, 2nd, 4th, 8th, ...).
+  std::uint64_t publish_failures = 0;
   /// RobotStates written per second over the publisher's last window (PublishRateMeter).
   double achieved_publish_rate_hz = 0.0;
   SensorCounters sensors;  ///< the ROS 2 sensor topics (dds.ros2.imu, mocap_pose)
@@ -212,6 +214,7 @@ class DdsBridge {
   std::atomic<std::uint64_t> motion_captures_received_{0};
   std::atomic<std::uint64_t> requests_received_{0};
   std::atomic<std::uint64_t> replies_published_{0};
+  std::atomic<std::uint64_t> publish_failures_{0};
   std::atomic<double> achieved_publish_rate_hz_{0.0};    ///< written by the publisher thread
   std::atomic<double> attainable_publish_rate_hz_{0.0};  ///< written by the publisher thread
   std::atomic<bool> publish_rate_short_{false};          ///< written by the publisher thread
