@@ -22,11 +22,15 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-const std::string kTestPlugins = SWIVEL_TEST_PLUGIN_DIR;
+const std::string k_test_plugins = SWIVEL_TEST_PLUGIN_DIR;
 
 // swiveld.yaml in a fresh folder; `hardware` and `localization` are plugin slots.
 class DaemonFiles {
  public:
+  DaemonFiles(const DaemonFiles&) = delete;
+  DaemonFiles& operator=(const DaemonFiles&) = delete;
+  DaemonFiles(DaemonFiles&&) = delete;
+  DaemonFiles& operator=(DaemonFiles&&) = delete;
   explicit DaemonFiles(const std::string& name)
       : dir_(fs::path(testing::TempDir()) / ("swivel_daemon_recovery_" + name)) {
     fs::remove_all(dir_);
@@ -34,11 +38,12 @@ class DaemonFiles {
   }
   ~DaemonFiles() { fs::remove_all(dir_); }
 
+  // NOLINTNEXTLINE(modernize-use-nodiscard): a rewrite of the file ignores its path
   std::string write(const std::string& hardware, const std::string& localization) const {
     const fs::path file = dir_ / "swiveld.yaml";
     std::ofstream(file) << "loop: {rate_hz: 1000, realtime: false}\n"
                         << "robot_model: " << SWIVEL_SOURCE_DIR << "/config/robots/docent.yaml\n"
-                        << "plugin_path: [" << kTestPlugins << "]\n"
+                        << "plugin_path: [" << k_test_plugins << "]\n"
                         << "hardware: " << hardware << "\n"
                         << "drivetrain: {plugin: differential}\n"
                         << "localization: " << localization << "\n"
@@ -71,8 +76,12 @@ bool wait_until(const std::function<bool()>& done, double seconds = 5.0) {
 // The lifecycle plugin's exported hooks; the handle keeps its library (and journal) loaded.
 class LifecycleProbe {
  public:
+  LifecycleProbe(const LifecycleProbe&) = delete;
+  LifecycleProbe& operator=(const LifecycleProbe&) = delete;
+  LifecycleProbe(LifecycleProbe&&) = delete;
+  LifecycleProbe& operator=(LifecycleProbe&&) = delete;
   LifecycleProbe() {
-    handle_ = dlopen((kTestPlugins + "/swivel_hardware_lifecycle.so").c_str(), RTLD_NOW);
+    handle_ = dlopen((k_test_plugins + "/swivel_hardware_lifecycle.so").c_str(), RTLD_NOW);
     if (handle_ == nullptr) return;
     journal_ =
         reinterpret_cast<int (*)(char*, unsigned)>(dlsym(handle_, "swivel_lifecycle_journal"));
@@ -86,7 +95,7 @@ class LifecycleProbe {
     if (handle_ != nullptr) dlclose(handle_);
   }
   [[nodiscard]] bool ok() const { return journal_ != nullptr && set_ != nullptr; }
-  std::string journal() const {
+  [[nodiscard]] std::string journal() const {
     char text[2048];
     journal_(text, sizeof text);
     return text;
@@ -291,7 +300,7 @@ void expect_rollback(const std::string& incoming, const std::string& reason) {
   EXPECT_EQ(s.fault_count, 0U);
   EXPECT_EQ(s.mode, LoopMode::kVelocity);
   EXPECT_EQ(daemon.config().localization.plugin, "raw_eg");
-  void* still = dlopen((kTestPlugins + "/swivel_localization_refuses_hand_over.so").c_str(),
+  void* still = dlopen((k_test_plugins + "/swivel_localization_refuses_hand_over.so").c_str(),
                        RTLD_NOW | RTLD_NOLOAD);
   EXPECT_EQ(still, nullptr) << "the refused instance's library is still loaded";
   if (still != nullptr) dlclose(still);

@@ -101,8 +101,12 @@ TEST(Ros2Topics, PublishesOdomToBaseOnRtTfForTf2) {
   ASSERT_GT(reader, 0);
   bridge.start();
 
-  std::string parent, child;
-  double x = 0.0, y = 0.0, qz = 0.0, qw = 0.0;
+  std::string parent;
+  std::string child;
+  double x = 0.0;
+  double y = 0.0;
+  double qz = 0.0;
+  double qw = 0.0;
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
   ASSERT_TRUE(wait_for([&] {

@@ -148,7 +148,9 @@ TEST(FaultAllocations, RecoveryWithMotionLimitsAllocatesNothingOnTheLoopThread) 
   FaultRig rig(options);
   auto refusing = rig.make_localization("refuses_hand_over", "{}");
   HeapCounts counts;
-  rt::LoopReply refused, cleared, posed;
+  rt::LoopReply refused;
+  rt::LoopReply cleared;
+  rt::LoopReply posed;
   std::thread loop_thread([&] {
     rig.drive(0.5, 0.0, 0.2, 500);  // warm-up
     AllocCounter counter;

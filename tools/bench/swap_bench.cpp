@@ -62,7 +62,9 @@ int run_swap(const SwapSettings& s) {
   const std::array<const char*, 3> names = {"kalman", "lsm", "raw_eg"};
   PluginLoader loader(PluginLoader::default_search_path());
   PluginInstance<Localization> active = std::move(plugins.localization);
-  std::vector<double> prepare_us, first_update_us, observed_us;
+  std::vector<double> prepare_us;
+  std::vector<double> first_update_us;
+  std::vector<double> observed_us;
   const rt::TimingReport before = loop.timing();
   int status = 0;
   for (int i = 0; i < s.swaps; ++i) {

@@ -249,7 +249,8 @@ int run(const Settings& s) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// The benchmarks behind main(), which reports what escapes them.
+static int bench_main(int argc, char** argv) {
   CLI::App app{"Swivel benchmarks"};
   app.require_subcommand(1);
   Settings settings;
@@ -314,4 +315,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swivel-bench: %s\n", e.what());
     return 1;
   }
+}
+
+int main(int argc, char** argv) {
+  try {
+    return bench_main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swivel-bench: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "swivel-bench: an exception that is not a std::exception\n");
+  }
+  return 1;
 }

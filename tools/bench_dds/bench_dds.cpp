@@ -145,8 +145,8 @@ int run_client(const std::string& robot, double rate_hz, double seconds) {
   ros2.ros_namespace = robot;
   const dds_entity_t odom =
       make_reader(pp.handle(), &nav_msgs_msg_dds__Odometry__desc, ros2.odom_topic());
-  const dds_entity_t tf =
-      make_reader(pp.handle(), &tf2_msgs_msg_dds__TFMessage__desc, ros2.tf_topic());
+  const dds_entity_t tf = make_reader(pp.handle(), &tf2_msgs_msg_dds__TFMessage__desc,
+                                      swivel::dds::Ros2Options::tf_topic());
   const dds_entity_t ping = make_writer(pp.handle(), &swivel_msg_VelocityCommand_desc, kPingTopic);
   const dds_entity_t pong = make_reader(pp.handle(), &swivel_msg_VelocityCommand_desc, kPongTopic);
   auto finish = [&](int code) {

@@ -219,15 +219,16 @@ void Daemon::start_bridge() {
     spdlog::info("DDS: run samples on {} at {:g} Hz", dds::kRunSamplesTopic,
                  1.0 / loop_->run_sample_period_s());
   }
-  spdlog::info("DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
-               dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,
-               dds_options_.publish_rate_hz,
-               dds_options_.ros2.enabled
-                   ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic() +
-                         (dds_options_.ros2.publish_tf ? ", " + dds_options_.ros2.tf_topic() : "") +
-                         ", " + dds_options_.ros2.joint_states_topic() + ", " +
-                         dds_options_.ros2.diagnostics_topic()
-                   : std::string());
+  spdlog::info(
+      "DDS: robot '{}' on domain {} ({}), state at {} Hz{}", config_.robot.name,
+      dds_options_.domain_id, dds::resolve_config(dds_options_.config_uri).description,
+      dds_options_.publish_rate_hz,
+      dds_options_.ros2.enabled
+          ? ", ROS 2 odometry on " + dds_options_.ros2.odom_topic() +
+                (dds_options_.ros2.publish_tf ? ", " + swivel::dds::Ros2Options::tf_topic() : "") +
+                ", " + dds_options_.ros2.joint_states_topic() + ", " +
+                swivel::dds::Ros2Options::diagnostics_topic()
+          : std::string());
   const auto& imu = dds_options_.ros2.imu;
   if (imu.enabled) {
     spdlog::info(

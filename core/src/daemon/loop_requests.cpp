@@ -3,6 +3,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,10 +22,7 @@ bool finite_pose(const PoseEstimate& p) {
     return false;
   }
   if (!p.has_covariance) return true;
-  for (const double v : p.covariance) {
-    if (!std::isfinite(v)) return false;
-  }
-  return true;
+  return std::ranges::all_of(p.covariance, [](double v) { return std::isfinite(v); });
 }
 
 std::string format(const char* pattern, double a, double b, double c) {

@@ -60,12 +60,15 @@ std::pair<double, double> noisy_line_errors(double heading, LsmMode mode) {
   lsm.configure(every_sample(mode));
   std::mt19937_64 rng(11);
   std::normal_distribution<double> noise(0.0, 0.01);
-  const double c = std::cos(heading), s = std::sin(heading);
-  double raw_sq = 0.0, out_sq = 0.0;
+  const double c = std::cos(heading);
+  const double s = std::sin(heading);
+  double raw_sq = 0.0;
+  double out_sq = 0.0;
   int n = 0;
   for (int j = 0; j < 400; ++j) {
     const double along = 0.02 * j;
-    const double tx = 1.0 + along * c, ty = 3.0 + along * s;
+    const double tx = 1.0 + along * c;
+    const double ty = 3.0 + along * s;
     const Pose2 eg{tx + noise(rng), ty + noise(rng), heading};
     lsm.push(eg, heading, along, 0.0);
     const Pose2 out = lsm.output(eg);
@@ -178,7 +181,10 @@ TEST(Lcalsm, DecimatesByPeriodWhenAsked) {
 // 0.2 m cannot tell drift from motion, so the faithful method changes the error by almost
 // nothing, while heading_aligned removes the lateral drift.
 double max_error_on_drifting_run(LsmMode mode, bool compensate) {
-  const double dt = 0.001, v = 0.3, r = 0.075, counts = 4096.0;
+  const double dt = 0.001;
+  const double v = 0.3;
+  const double r = 0.075;
+  const double counts = 4096.0;
   const double rad_per_count = 2.0 * std::numbers::pi / counts;
   EgOdometry eg(EgConfig{HeadingSource::kGyro, 1.0, 0.0});
   eg.reset(Pose2{0.0, 3.0, 0.0});
@@ -188,7 +194,8 @@ double max_error_on_drifting_run(LsmMode mode, bool compensate) {
   lsm.configure(c);
   std::mt19937_64 rng(2024);
   std::normal_distribution<double> gyro_noise(0.0, 0.002);
-  double prev_counts = 0.0, max_err = 0.0;
+  double prev_counts = 0.0;
+  double max_err = 0.0;
   const int steps = static_cast<int>(8.0 / v / dt);
   for (int i = 1; i <= steps; ++i) {
     const double t = i * dt;
