@@ -242,7 +242,10 @@ TEST(Swivelctl, StatusNamesACmdVelPublisherOfTheOtherType) {
   const RunResult json = swivelctl("status --json --timeout 10 --robot " + robot);
   ASSERT_EQ(json.exit_code, 0) << json.err;
   const auto j = nlohmann::json::parse(json.out);
-  EXPECT_EQ(j[robot]["diagnostics"]["dds_warnings"], warning);
+  // On a busy machine a missed publish rate may be warned about beside it.
+  EXPECT_NE(j[robot]["diagnostics"]["dds_warnings"].get<std::string>().find(warning),
+            std::string::npos)
+      << j[robot]["diagnostics"]["dds_warnings"];
   EXPECT_DOUBLE_EQ(j[robot]["diagnostics"]["publish_rate_hz"].get<double>(), 100.0);
 }
 
