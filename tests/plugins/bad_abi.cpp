@@ -5,7 +5,7 @@
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
   static const SwivelPluginDescriptor descriptor{
-      999u,
+      999U,
       SWIVEL_PLUGIN_LOCALIZATION,
       "bad_abi",
       [](const char** /*error*/) -> void* {

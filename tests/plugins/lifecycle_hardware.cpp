@@ -153,6 +153,8 @@ class LifecycleHardware final : public Hardware {
       }
     }
     ~Guard() { hardware.calls_.fetch_sub(1, std::memory_order_acq_rel); }
+    Guard(const Guard&) = delete;
+    Guard& operator=(const Guard&) = delete;
     LifecycleHardware& hardware;
   };
 

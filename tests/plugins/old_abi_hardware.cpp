@@ -18,7 +18,7 @@ struct DescriptorBeforeAbi3 {
 
 extern "C" __attribute__((visibility("default"))) const SwivelPluginDescriptor*
 swivel_plugin_descriptor(void) {
-  static const DescriptorBeforeAbi3 descriptor{1u, SWIVEL_PLUGIN_HARDWARE, "old_abi",
+  static const DescriptorBeforeAbi3 descriptor{1U, SWIVEL_PLUGIN_HARDWARE, "old_abi",
                                                [](const char** error) -> void* {
                                                  *error = "must never be called";
                                                  return nullptr;

@@ -30,7 +30,7 @@
 // NOLINTBEGIN(readability-identifier-naming,modernize-use-using,modernize-redundant-void-arg)
 extern "C" {
 
-#define SWIVEL_PLUGIN_ABI_VERSION 4u
+#define SWIVEL_PLUGIN_ABI_VERSION 4U
 #define SWIVEL_PLUGIN_ENTRY_POINT "swivel_plugin_descriptor"
 
 enum SwivelPluginKind : std::uint32_t {

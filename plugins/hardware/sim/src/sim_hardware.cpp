@@ -135,7 +135,7 @@ void SimHardware::configure(const PluginContext& ctx) {
   injection_pending_.store(false, std::memory_order_release);
 }
 
-bool SimHardware::active(const SimFault& fault, double t_s) const noexcept {
+bool SimHardware::active(const SimFault& fault, double t_s) noexcept {
   return t_s >= fault.start_s && t_s < fault.start_s + fault.duration_s;
 }
 

@@ -123,7 +123,7 @@ class SimHardware final : public Hardware {
     double frozen_rad = 0.0;
   };
 
-  [[nodiscard]] bool active(const SimFault& fault, double t_s) const noexcept;
+  [[nodiscard]] static bool active(const SimFault& fault, double t_s) noexcept;
   void take_injection(double t_s) noexcept;
   Status apply_faults(double t_s, HardwareState& out) noexcept;
 
