@@ -6,76 +6,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <exception>
 #include <numbers>
 #include <span>
 #include <stdexcept>
-#include <string_view>
 #include <system_error>
-#include <typeinfo>
 
-#include "swivel/rt/exception_text.hpp"
+#include "swivel/rt/finite.hpp"
 
 namespace swivel::rt {
 namespace {
-
-bool finite(double v) noexcept { return std::isfinite(v); }
-
-bool finite(const Twist2& t) noexcept {
-  return finite(t.vx_mps) && finite(t.vy_mps) && finite(t.wz_radps);
-}
-
-bool is_zero(const Twist2& t) noexcept {
-  return t.vx_mps == 0.0 && t.vy_mps == 0.0 && t.wz_radps == 0.0;
-}
-
-bool finite(const Pose2& p) noexcept { return finite(p.x_m) && finite(p.y_m) && finite(p.yaw_rad); }
-
-// The first non-finite field of a reading, as a static cause text; nullptr when all finite.
-const char* non_finite_field(const HardwareState& s) noexcept {
-  if (!finite(s.stamp_s)) return "non-finite reading timestamp";
-  for (std::uint32_t i = 0; i < s.module_count; ++i) {
-    if (!finite(s.wheel_angle_rad[i])) return "non-finite wheel angle";
-    if (!finite(s.steer_angle_rad[i])) return "non-finite steering angle";
-  }
-  if (s.gyro_valid && !finite(s.gyro_wz_radps)) return "non-finite gyro rate";
-  if (s.motion_capture.valid &&
-      (!finite(s.motion_capture.stamp_s) || !finite(s.motion_capture.pose))) {
-    return "non-finite motion-capture sample in the reading";
-  }
-  return nullptr;
-}
-
-bool finite(const ActuatorCommand& c) noexcept {
-  for (std::uint32_t i = 0; i < c.module_count; ++i) {
-    if (!finite(c.wheel_rate_radps[i]) || !finite(c.steer_rate_radps[i])) return false;
-  }
-  return true;
-}
-
-bool finite_covariance(const PoseEstimate& e) noexcept {
-  return !e.has_covariance ||
-         std::all_of(e.covariance.begin(), e.covariance.end(), [](double v) { return finite(v); });
-}
-
-// What is published: a non-finite covariance goes out as none (robot_localization and Nav2
-// reject NaN), while the fault says why.
-PoseEstimate publishable(PoseEstimate e) noexcept {
-  if (!finite_covariance(e)) {
-    e.covariance = {};
-    e.has_covariance = false;
-  }
-  return e;
-}
-
-bool finite(const MotionCaptureSample& m) noexcept { return finite(m.stamp_s) && finite(m.pose); }
-
-bool all_zero(const ActuatorCommand& c) noexcept {
-  for (std::uint32_t i = 0; i < c.module_count && i < kMaxModules; ++i) {
-    if (c.wheel_rate_radps[i] != 0.0 || c.steer_rate_radps[i] != 0.0) return false;
-  }
-  return true;
-}
 
 // The controlled stop: the model's limits, with the stop's deceleration on the axes whose
 // model has no acceleration limit.
@@ -148,16 +87,14 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       hardware_(hardware),
       drivetrain_(&drivetrain),
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
-      active_localization_(&localization),
+      swap_(localization, localization_name),
       run_samples_(options.run_sample_rate_hz > 0.0 ? 1.0 / options.run_sample_rate_hz : 0.0,
                    1.0 / options.rate_hz),
       timing_(1.0 / options.rate_hz),
-      odometry_monitor_(options.odometry_check),
-      twist_window_(twist_window_options(options)),
+      odometry_(options.odometry_check, twist_window_options(options)),
       command_limiter_(options.limits),
       stop_limiter_(stop_limits(options)),
-      gyro_watch_(options.external_sensors.gyro),
-      motion_capture_watch_(options.external_sensors.motion_capture) {
+      sensors_(options.external_sensors) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
     throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
                                 std::to_string(options.rate_hz));
@@ -194,7 +131,7 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
         "the loop rate " +
         std::to_string(options.rate_hz) + " Hz, got " + std::to_string(options.run_sample_rate_hz));
   }
-  copy_text(localization_name, state_.localization_plugin);
+  swap_.publish(state_);
   state_.module_count = module_count_;
   state_.estimate = localization.estimate();
   state_.ros_stamp_ns = clock_offset_.to_realtime_ns(state_.stamp_s);
@@ -285,56 +222,15 @@ bool ControlLoop::push_command(const VelocityCommand& command) noexcept {
 
 bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample,
                                       MotionCaptureSource source) noexcept {
-  return motion_capture_.try_push({sample, source});
+  return sensors_.push_motion_capture(sample, source);
 }
 
-bool ControlLoop::push_gyro(const GyroSample& sample) noexcept { return gyro_.try_push(sample); }
-
-bool ControlLoop::request_swap(LoopSwap* swap) noexcept {
-  if (swap == nullptr || swap->localization == nullptr) return false;
-  bool idle = false;
-  if (!swap_in_flight_.compare_exchange_strong(idle, true, std::memory_order_acq_rel)) {
-    return false;
-  }
-  swap->outcome = SwapOutcome{};
-  pending_swap_.store(swap, std::memory_order_release);
-  return true;
-}
-
-LoopSwap* ControlLoop::take_retired_swap() noexcept {
-  LoopSwap* retired = retired_swap_.exchange(nullptr, std::memory_order_acq_rel);
-  if (retired != nullptr) swap_in_flight_.store(false, std::memory_order_release);
-  return retired;
-}
-
-bool ControlLoop::withdraw_swap(LoopSwap* swap) noexcept {
-  for (;;) {
-    LoopSwap* expected = swap;
-    if (pending_swap_.compare_exchange_strong(expected, nullptr, std::memory_order_acq_rel)) {
-      swap_in_flight_.store(false, std::memory_order_release);
-      return true;
-    }
-    if (retired_swap_.load(std::memory_order_acquire) == swap ||
-        !swap_in_flight_.load(std::memory_order_acquire)) {
-      return false;
-    }
-    // The loop is examining it at this very cycle boundary: it puts it back or retires it.
-    const timespec pause{0, 20000};
-    nanosleep(&pause, nullptr);
-  }
-}
-
-bool ControlLoop::request_localization_swap(Localization* next, const char* name) noexcept {
-  // The slot is the loop's own; it is free whenever no swap is in flight.
-  if (next == nullptr || swap_in_flight_.load(std::memory_order_acquire)) return false;
-  localization_only_swap_ = LoopSwap{};
-  localization_only_swap_.localization = next;
-  copy_text(name, localization_only_swap_.localization_name);
-  return request_swap(&localization_only_swap_);
+bool ControlLoop::push_gyro(const GyroSample& sample) noexcept {
+  return sensors_.push_gyro(sample);
 }
 
 Localization* ControlLoop::take_retired_localization(SwapOutcome* outcome) noexcept {
-  LoopSwap* retired = take_retired_swap();
+  LoopSwap* retired = swap_.take_retired();
   if (retired == nullptr) return nullptr;
   if (outcome != nullptr) *outcome = retired->outcome;
   return retired->localization;
@@ -420,207 +316,21 @@ Calibration* ControlLoop::take_finished_calibration(CalibrationOutcome* outcome)
   return retired;
 }
 
-void ControlLoop::log_event(LogLevel level, LogCode code, double now_s, const char* text, double a,
-                            double b, double c, double d, const char* detail) noexcept {
-  LogRecord record;
-  record.stamp_s = now_s;
-  record.cycle = state_.cycle;
-  record.level = level;
-  record.code = code;
-  record.text = text != nullptr ? text : "";
-  record.values = {a, b, c, d};
-  copy_text(detail, record.detail);
-  log_.push(record);
-}
-
-void ControlLoop::raise_fault(FaultCode code, double now_s, const char* detail, double value,
-                              double limit) noexcept {
-  cycle_fault_ = code;
-  if (latched_fault_ == code) return;  // the same cause persisting is one event
-  latched_fault_ = code;
-  // A plugin that gives no reason still leaves a cause to show.
-  copy_text(detail != nullptr && detail[0] != '\0' ? detail : fault_code_name(code),
-            latched_detail_);
-  ++state_.fault_count;
-  log_event(LogLevel::kError, LogCode::kFaultRaised, now_s, "safe stop", static_cast<double>(code),
-            static_cast<double>(state_.fault_count), value, limit, detail);
-}
-
-// A frozen or slipping encoder: the odometry keeps disagreeing with the gyro, or (redundant
-// drivetrains) with itself.
-void ControlLoop::check_odometry(const OdometryIncrement& odometry, double now_s) noexcept {
-  const bool gyro_valid = current_.gyro_valid;
-  switch (odometry_monitor_.update(odometry, gyro_valid, current_.gyro_wz_radps)) {
-    case OdometryMonitor::Verdict::kConsistent: return;
-    case OdometryMonitor::Verdict::kGyroDisagrees:
-      raise_fault(FaultCode::kOdometryInconsistent, now_s,
-                  "encoder yaw rate disagrees with the gyro",
-                  odometry_monitor_.yaw_difference_radps(), odometry_monitor_.gyro_limit_radps());
-      return;
-    case OdometryMonitor::Verdict::kResidualHigh:
-      raise_fault(FaultCode::kOdometryInconsistent, now_s,
-                  "drivetrain odometry residual above its limit", odometry_monitor_.residual_mps(),
-                  odometry_monitor_.options().residual_limit_mps);
-      return;
-  }
-}
-
-// The newest external gyro sample: at most one ring's worth per cycle, so that a source
-// pushing as fast as the loop drains cannot hold the cycle.
-void ControlLoop::take_external_gyro(double now_s) noexcept {
-  GyroSample sample;
-  pop_at_most(gyro_, sample, kGyroDrainLimit, [&](const GyroSample& g) {
-    if (finite(g.received_s) && finite(g.wz_radps)) {
-      external_gyro_ = g;
-      has_external_gyro_ = true;
-      gyro_watch_.observe(g.received_s);
-    } else {
-      log_event(LogLevel::kWarn, LogCode::kMessage, now_s,
-                "non-finite external gyro sample dropped", g.received_s, g.wz_radps);
-    }
-  });
-}
-
-// The newest motion-capture sample from outside the hardware (the Swivel topic, the watched
-// source), bounded like the gyro's; it fills in when the hardware reading carries none.
-void ControlLoop::take_motion_capture(double now_s, bool reading_ok) noexcept {
-  MotionCaptureInput input;
-  MotionCaptureSample newest;
-  pop_at_most(motion_capture_, input, kMotionCaptureDrainLimit, [&](const MotionCaptureInput& in) {
-    const MotionCaptureSample& m = in.sample;
-    if (!m.valid) return;
-    if (finite(m)) {
-      newest = m;
-      if (in.source == MotionCaptureSource::kWatched) {
-        motion_capture_watch_.observe(m.stamp_s);
-      }
-    } else {
-      log_event(LogLevel::kWarn, LogCode::kMotionCaptureRejected, now_s,
-                "non-finite motion-capture sample dropped", m.stamp_s);
-    }
-  });
-  if (reading_ok && newest.valid && !current_.motion_capture.valid) {
-    current_.motion_capture = newest;
-  }
-}
-
-// A configured source that went silent is a latched fault; it persists (and refuses a
-// clear) for as long as the source stays silent. The causes were written off the loop.
-void ControlLoop::check_external_sensors(double now_s) noexcept {
-  if (const char* stale = gyro_watch_.check(now_s)) {
-    raise_fault(FaultCode::kSensorStale, now_s, stale, gyro_watch_.age_s(now_s),
-                gyro_watch_.limit_s());
-  }
-  if (const char* stale = motion_capture_watch_.check(now_s)) {
-    raise_fault(FaultCode::kSensorStale, now_s, stale, motion_capture_watch_.age_s(now_s),
-                motion_capture_watch_.limit_s());
-  }
-}
-
-void ControlLoop::raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept {
-  // Every rejected command is its own event; a timeout is one event until a command arrives.
-  if (transient_fault_ == code && code == FaultCode::kCommandTimeout) return;
-  transient_fault_ = code;
-  copy_text(text, transient_detail_);
-  ++state_.fault_count;
-  log_event(LogLevel::kWarn, LogCode::kFaultRaised, now_s, text, static_cast<double>(code),
-            static_cast<double>(state_.fault_count));
-}
-
-// Plugins must not throw on the loop; one that does anyway is stopped at this boundary and
-// its exception becomes a fault with a controlled stop rather than std::terminate.
-// The fault keeps what was thrown ("plugin threw std::runtime_error: <what>"), written into
-// thrown_text_ without allocating.
-template <class Call>
-Status ControlLoop::guarded(Call&& call, const char*& thrown) noexcept {
-  thrown = nullptr;
-  constexpr std::string_view kPrefix = "plugin threw ";
-  copy_text(kPrefix.data(), thrown_text_);
-  const std::span<char> rest = std::span(thrown_text_).subspan(kPrefix.size());
-  try {
-    return call();
-  } catch (const std::exception& e) {
-    describe_exception(&typeid(e), e.what(), rest);
-  } catch (...) {
-    describe_exception(current_exception_type(), nullptr, rest);
-  }
-  thrown = thrown_text_.data();
-  return Status::kError;
-}
-
 void ControlLoop::write_zero_setpoints() noexcept {
   setpoints_ = ActuatorCommand{};
   setpoints_.module_count = module_count_;
 }
 
 // A swap at the cycle boundary. One with a new robot model waits for a cycle at rest: a
-// drivetrain swapped under a moving robot would change its setpoints mid-motion.
+// drivetrain swapped under a moving robot would change its setpoints mid-motion. At rest,
+// no calibration drives the actuators either.
 void ControlLoop::take_pending_swap(double now_s) noexcept {
-  LoopSwap* swap = pending_swap_.exchange(nullptr, std::memory_order_acq_rel);
-  if (swap == nullptr) return;
-  if (swap->drivetrain != nullptr && !at_rest()) {
-    pending_swap_.store(swap, std::memory_order_release);  // again next cycle, or withdrawn
-    return;
+  const bool rest = active_calibration_.load(std::memory_order_relaxed) == nullptr &&
+                    at_rest(state_, last_write_zero_, module_count_);
+  ModelSettings model;
+  if (swap_.take(now_s, rest, module_count_, drivetrain_, model, guard_, events_)) {
+    apply_model(model);
   }
-  Localization* outgoing = active_localization_.load(std::memory_order_relaxed);
-  Localization* incoming = swap->localization;
-  const PoseEstimate handed = outgoing->estimate();
-  const char* thrown = nullptr;
-  const char* refusal = nullptr;
-  if (swap->drivetrain != nullptr && swap->drivetrain->module_count() != module_count_) {
-    refusal = "the new drivetrain drives a different number of modules";
-  } else if (guarded([&] { return incoming->hand_over(handed); }, thrown) != Status::kOk) {
-    refusal = thrown != nullptr ? thrown : incoming->last_error();
-    if (refusal == nullptr || refusal[0] == '\0') refusal = "hand_over failed without a reason";
-  }
-  if (refusal != nullptr) {
-    // Roll back: the outgoing instances still hold a valid estimate and stay active; the
-    // refused ones go back to the swapping thread. No fault: the robot lost nothing.
-    swap->outcome.taken = false;
-    copy_text(refusal, swap->outcome.refusal);
-    retired_swap_.store(swap, std::memory_order_release);
-    log_event(LogLevel::kWarn, LogCode::kLocalizationSwapRefused, now_s, "",
-              static_cast<double>(state_.localization_swaps), 0.0, 0.0, 0.0,
-              swap->outcome.refusal.data());
-    return;
-  }
-  swap->outcome.taken = true;
-  swap->outcome.refusal[0] = '\0';
-  active_localization_.store(incoming, std::memory_order_release);
-  swap->localization = outgoing;
-  state_.localization_plugin = swap->localization_name;
-  ++state_.localization_swaps;
-  if (swap->drivetrain != nullptr) {
-    Drivetrain* replaced = drivetrain_;
-    drivetrain_ = swap->drivetrain;
-    swap->drivetrain = replaced;
-    apply_model(swap->model);
-    ++state_.model_swaps;
-    log_event(LogLevel::kInfo, LogCode::kMessage, now_s, "robot model swapped at rest",
-              static_cast<double>(state_.model_swaps));
-  }
-  // request_swap() refuses while a swap is in flight, so this slot is empty here.
-  retired_swap_.store(swap, std::memory_order_release);
-  log_event(LogLevel::kInfo, LogCode::kLocalizationSwapped, now_s, "",
-            static_cast<double>(state_.localization_swaps), handed.pose.x_m, handed.pose.y_m,
-            handed.pose.yaw_rad, state_.localization_plugin.data());
-}
-
-// At rest: the last cycle commanded zero and wrote zero setpoints, no calibration drives
-// the actuators, and the encoders measured every wheel and steering rate below
-// kAtRestJointRateRadps (no measurement, e.g. after a failed reading, is not at rest).
-bool ControlLoop::at_rest() const noexcept {
-  if (active_calibration_.load(std::memory_order_relaxed) != nullptr) return false;
-  if (!last_write_zero_ || !state_.has_joint_rates) return false;
-  const Twist2& command = state_.command_twist;
-  if (command.vx_mps != 0.0 || command.vy_mps != 0.0 || command.wz_radps != 0.0) return false;
-  for (std::uint32_t i = 0; i < module_count_; ++i) {
-    if (!(std::abs(state_.wheel_rate_radps[i]) < kAtRestJointRateRadps) ||
-        !(std::abs(state_.steer_rate_radps[i]) < kAtRestJointRateRadps)) {
-      return false;
-    }
-  }
-  return true;
 }
 
 // The new model's limits and encoder resolutions. The robot is at rest: both limiters start
@@ -634,11 +344,7 @@ void ControlLoop::apply_model(const ModelSettings& model) noexcept {
   command_limiter_.reset();
   stop_limiter_.reset();
   limiter_ = &stop_limiter_;
-  if (!twist_window_.set_resolutions(model.wheel_encoder_resolution_rad,
-                                     model.steer_encoder_resolution_rad)) {
-    (void)twist_window_.set_resolutions(0.0, 0.0);  // unknown: no covariance
-  }
-  twist_window_.reset();
+  odometry_.set_resolutions(model.wheel_encoder_resolution_rad, model.steer_encoder_resolution_rad);
 }
 
 void ControlLoop::take_pending_calibration(double now_s) noexcept {
@@ -646,13 +352,13 @@ void ControlLoop::take_pending_calibration(double now_s) noexcept {
   Calibration* next = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel);
   if (next == nullptr) return;
   active_calibration_.store(next, std::memory_order_release);
-  if (latched_fault_ != FaultCode::kNone || stopping_) {
+  if (events_.any_latched() || stopping_) {
     // A robot in safe stop must be cleared before anything moves it; one shutting down stays.
     retire_calibration(CalibrationOutcome::kRefused, now_s);
     return;
   }
   has_command_ = false;
-  log_event(LogLevel::kInfo, LogCode::kMessage, now_s, "calibration started");
+  events_.log(LogLevel::kInfo, LogCode::kMessage, now_s, "calibration started");
 }
 
 void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) noexcept {
@@ -663,13 +369,13 @@ void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) n
   retired_calibration_.store(outgoing, std::memory_order_release);
   active_calibration_.store(nullptr, std::memory_order_release);
   has_command_ = false;  // only a command sent after the calibration moves the robot
-  log_event(outcome == CalibrationOutcome::kFinished ? LogLevel::kInfo : LogLevel::kWarn,
-            LogCode::kMessage, now_s,
-            outcome == CalibrationOutcome::kFinished    ? "calibration finished"
-            : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
-            : outcome == CalibrationOutcome::kRefused
-                ? "calibration refused: fault latched or stopping"
-                : "calibration stopped by a fault");
+  events_.log(outcome == CalibrationOutcome::kFinished ? LogLevel::kInfo : LogLevel::kWarn,
+              LogCode::kMessage, now_s,
+              outcome == CalibrationOutcome::kFinished    ? "calibration finished"
+              : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
+              : outcome == CalibrationOutcome::kRefused
+                  ? "calibration refused: fault latched or stopping"
+                  : "calibration stopped by a fault");
 }
 
 // One cycle of an active calibration. Returns true while it drives the actuators this cycle
@@ -681,22 +387,23 @@ bool ControlLoop::step_calibration(double now_s, bool final_stop) noexcept {
   if (final_stop || cancel_calibration_.exchange(false, std::memory_order_acq_rel)) {
     retire_calibration(CalibrationOutcome::kCancelled, now_s);
     if (!final_stop)
-      raise_transient_fault(FaultCode::kCalibrationError, now_s, "calibration cancelled");
+      events_.raise_transient(FaultCode::kCalibrationError, now_s, "calibration cancelled");
     return false;
   }
-  if (latched_fault_ != FaultCode::kNone) {
+  if (events_.any_latched()) {
     retire_calibration(CalibrationOutcome::kFailed, now_s);
     return false;
   }
   const char* thrown = nullptr;
-  const Status status = guarded([&] { return calibration->step(current_, setpoints_); }, thrown);
+  const Status status =
+      guard_([&] { return calibration->step(read_.current(), setpoints_); }, thrown);
   if (status != Status::kOk) {
-    raise_fault(FaultCode::kCalibrationError, now_s,
-                thrown != nullptr ? thrown : calibration->last_error());
+    events_.raise(FaultCode::kCalibrationError, now_s,
+                  thrown != nullptr ? thrown : calibration->last_error());
   } else if (setpoints_.module_count != module_count_ || !finite(setpoints_)) {
-    raise_fault(FaultCode::kCalibrationError, now_s, "invalid calibration setpoints");
+    events_.raise(FaultCode::kCalibrationError, now_s, "invalid calibration setpoints");
   } else if (calibration->failed()) {
-    raise_fault(FaultCode::kCalibrationError, now_s, calibration->last_error());
+    events_.raise(FaultCode::kCalibrationError, now_s, calibration->last_error());
   } else if (calibration->finished()) {
     retire_calibration(CalibrationOutcome::kFinished, now_s);
     return false;
@@ -715,7 +422,7 @@ void ControlLoop::run_cycle(double now_s) noexcept { cycle(now_s, false); }
 bool ControlLoop::hold_hardware() noexcept {
   HardwareAccess access = hardware_access_.load(std::memory_order_acquire);
   if (access == HardwareAccess::kPauseRequested) {
-    if (latched_fault_ == FaultCode::kNone) {
+    if (!events_.any_latched()) {
       (void)hardware_access_.compare_exchange_strong(access, HardwareAccess::kPauseRefused,
                                                      std::memory_order_acq_rel);
       return false;
@@ -733,7 +440,7 @@ bool ControlLoop::hold_hardware() noexcept {
   if (hardware_paused_) {
     // The last reading is from before the pause: the next one starts the odometry afresh.
     hardware_paused_ = false;
-    has_previous_ = false;
+    read_.forget_previous();
   }
   return false;
 }
@@ -746,34 +453,31 @@ void ControlLoop::take_request(double now_s, std::uint64_t& clear_id) noexcept {
     clear_pending_ = true;
     return;
   }
-  Localization& localization = *active_localization_.load(std::memory_order_relaxed);
+  Localization& localization = *swap_.active();
   LoopReply reply;
   reply.id = request.id;
   const char* thrown = nullptr;
   if (!finite(request.pose.pose)) {
     copy_text("non-finite pose", reply.detail);
-  } else if (guarded([&] { return localization.hand_over(request.pose); }, thrown) == Status::kOk) {
+  } else if (guard_([&] { return localization.hand_over(request.pose); }, thrown) == Status::kOk) {
     reply.ok = true;
   } else {
     copy_text(thrown != nullptr ? thrown : localization.last_error(), reply.detail);
     if (reply.detail[0] == '\0') copy_text("hand_over failed without a reason", reply.detail);
   }
   if (reply.ok) {
-    log_event(LogLevel::kInfo, LogCode::kPoseSet, now_s, "", static_cast<double>(request.id),
-              request.pose.pose.x_m, request.pose.pose.y_m, request.pose.pose.yaw_rad);
+    events_.log(LogLevel::kInfo, LogCode::kPoseSet, now_s, "", static_cast<double>(request.id),
+                request.pose.pose.x_m, request.pose.pose.y_m, request.pose.pose.yaw_rad);
   } else {
-    log_event(LogLevel::kWarn, LogCode::kPoseRefused, now_s, "", static_cast<double>(request.id),
-              0.0, 0.0, 0.0, reply.detail.data());
+    events_.log(LogLevel::kWarn, LogCode::kPoseRefused, now_s, "", static_cast<double>(request.id),
+                0.0, 0.0, 0.0, reply.detail.data());
   }
   (void)replies_.publish(reply);
 }
 
 // Leaves the latched fault (both clear paths).
 void ControlLoop::clear_latched_fault(double now_s) noexcept {
-  log_event(LogLevel::kInfo, LogCode::kFaultCleared, now_s, "",
-            static_cast<double>(latched_fault_));
-  latched_fault_ = FaultCode::kNone;
-  latched_detail_[0] = '\0';
+  events_.clear_latched(now_s);
   state_.hardware_in_error = false;
   has_command_ = false;  // only a command that arrives from now on moves the robot
 }
@@ -781,23 +485,23 @@ void ControlLoop::clear_latched_fault(double now_s) noexcept {
 void ControlLoop::answer_clear(std::uint64_t id, double now_s) noexcept {
   LoopReply reply;
   reply.id = id;
-  if (latched_fault_ != FaultCode::kNone) {
-    reply.fault = latched_fault_;
-    reply.detail = latched_detail_;
-    reply.ok = cycle_fault_ == FaultCode::kNone;
+  if (events_.any_latched()) {
+    reply.fault = events_.latched();
+    reply.detail = events_.latched_detail();
+    reply.ok = events_.cycle_fault() == FaultCode::kNone;
     if (reply.ok) {
       clear_latched_fault(now_s);
     } else {
-      log_event(LogLevel::kWarn, LogCode::kClearRefused, now_s, "",
-                static_cast<double>(latched_fault_), static_cast<double>(id), 0.0, 0.0,
-                latched_detail_.data());
+      events_.log(LogLevel::kWarn, LogCode::kClearRefused, now_s, "",
+                  static_cast<double>(events_.latched()), static_cast<double>(id), 0.0, 0.0,
+                  events_.latched_detail().data());
     }
-  } else if (transient_fault_ != FaultCode::kNone) {
-    reply.fault = transient_fault_;
-    reply.detail = transient_detail_;
+  } else if (events_.transient() != FaultCode::kNone) {
+    reply.fault = events_.transient();
+    reply.detail = events_.transient_detail();
     // A missing command stream persists until a command arrives, which resumes by itself.
-    reply.ok = transient_fault_ != FaultCode::kCommandTimeout;
-    if (reply.ok) transient_fault_ = FaultCode::kNone;
+    reply.ok = events_.transient() != FaultCode::kCommandTimeout;
+    if (reply.ok) events_.clear_transient();
   } else {
     reply.ok = true;  // nothing to clear
   }
@@ -828,25 +532,6 @@ Twist2 ControlLoop::limit(const Twist2& target, bool stopping, double now_s) noe
   return limiter.step(target, dt_s);
 }
 
-// Readings resumed after a gap: the localization takes the dead-reckoned pose with the
-// covariance widened by what the encoders measured over the gap (`measured`), so that the
-// pose does not jump. False when it refuses: it then continues from its own estimate.
-bool ControlLoop::end_reading_gap(Localization& localization, const OdometryIncrement& measured,
-                                  double now_s) noexcept {
-  const PoseEstimate handed = reading_gap_.resume(measured, now_s);
-  const char* thrown = nullptr;
-  if (guarded([&] { return localization.hand_over(handed); }, thrown) != Status::kOk) {
-    log_event(LogLevel::kWarn, LogCode::kMessage, now_s,
-              "readings resumed: the localization refused the dead-reckoned pose", 0.0, 0.0, 0.0,
-              0.0, thrown != nullptr ? thrown : localization.last_error());
-    return false;
-  }
-  log_event(LogLevel::kInfo, LogCode::kMessage, now_s,
-            "readings resumed: pose kept, covariance widened by the gap's error (m, rad)",
-            reading_gap_.last_position_error_m(), reading_gap_.last_heading_error_rad());
-  return true;
-}
-
 // The drivetrain scaled the twist down to its own wheel or steering limits: the limiter
 // continues from what the robot was commanded, so that a later stop ramps down from the
 // robot's speed and not from one it never reached. Below the floors a drivetrain may fade a
@@ -863,7 +548,7 @@ void ControlLoop::follow_drivetrain(const Twist2& limited, const Twist2& applied
 }
 
 void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
-  cycle_fault_ = FaultCode::kNone;
+  events_.begin_cycle(state_.cycle);
   if (!final_stop && hold_hardware()) {
     // Paused for a lifecycle call off the loop: no hardware call; the robot is stopped.
     ++state_.cycle;
@@ -888,96 +573,37 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
         now_s - controlled_stop_requested_s_.load(std::memory_order_relaxed);
     stop_catch_up_s_ = std::max(since_request_s, 0.0) + 0.5 * period_s_ -
                        (has_last_cycle_ ? std::max(now_s - last_cycle_s_, 0.0) : period_s_);
-    log_event(LogLevel::kInfo, LogCode::kMessage, now_s,
-              "controlled stop: commands ignored, bringing the robot to rest");
+    events_.log(LogLevel::kInfo, LogCode::kMessage, now_s,
+                "controlled stop: commands ignored, bringing the robot to rest");
   }
   take_pending_swap(now_s);
   take_pending_calibration(now_s);
   std::uint64_t clear_id = 0;
   clear_pending_ = false;
   take_request(now_s, clear_id);
-  Localization& localization = *active_localization_.load(std::memory_order_relaxed);
+  Localization& localization = *swap_.active();
 
   // Read and check the hardware.
-  bool reading_ok = false;
-  const char* hardware_failure = nullptr;  // cause of a hardware fault in this cycle
+  const ReadOutcome read = read_.read(now_s, hardware_, sensors_, guard_, events_);
+  const bool reading_ok = read.ok;
+  const char* hardware_failure = read.failure;  // cause of a hardware fault in this cycle
   const char* thrown = nullptr;
-  take_external_gyro(now_s);
-  if (guarded([&] { return hardware_.read(now_s, current_); }, thrown) != Status::kOk) {
-    hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
-    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
-  } else if (current_.module_count > kMaxModules) {
-    hardware_failure = "module count out of range";
-    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
-  } else {
-    if (gyro_watch_.enabled()) {
-      // The configured external gyro replaces the hardware's; a stale one is no reading
-      // (the localization falls back as on a gyro dropout while the fault stops the robot).
-      const bool fresh = has_external_gyro_ && gyro_watch_.fresh(now_s);
-      current_.gyro_valid = fresh;
-      current_.gyro_wz_radps = fresh ? external_gyro_.wz_radps : 0.0;
-    }
-    if (const char* field = non_finite_field(current_); field != nullptr) {
-      raise_fault(FaultCode::kNonFiniteSensor, now_s, field);
-    } else {
-      reading_ok = true;
-    }
+  const HardwareState& current = read_.current();
+  const HardwareState& previous = read_.previous();
+  const bool has_previous = read_.has_previous();
+  if (reading_ok && current.motion_capture.valid) {
+    run_samples_.note_motion_capture(current.motion_capture);
   }
-  take_motion_capture(now_s, reading_ok);
-  check_external_sensors(now_s);
-  if (reading_ok && current_.motion_capture.valid) {
-    run_samples_.note_motion_capture(current_.motion_capture);
-  }
-  if (!reading_ok && has_previous_ && !reading_gap_.active()) {
-    // Readings stopped: the odometry follows the controlled stop until they resume.
-    reading_gap_.begin(state_.estimate, state_.odometry_twist,
-                       state_.has_twist_covariance ? &state_.twist_covariance : nullptr,
-                       has_last_cycle_ ? last_cycle_s_ : now_s);
-  }
-  const bool resuming = reading_ok && reading_gap_.active();
 
-  // Odometry and localization. The twist window goes first: its forward kinematics calls
-  // leave the drivetrain's module states to the cycle's own call.
-  OdometryIncrement odometry;
-  bool twist_ok = false;
-  if (reading_ok) {
-    if (!has_previous_ || resuming) twist_window_.reset();  // no fit across missing readings
-    twist_window_.push(current_);
-  }
-  if (reading_ok && has_previous_) {
-    // A refusal here is no fault: the cycle's own forward() below decides that.
-    twist_ok = guarded([&] { return twist_window_.estimate(*drivetrain_, twist_estimate_); },
-                       thrown) == Status::kOk;
-    if (guarded([&] { return drivetrain_->forward(previous_, current_, odometry); }, thrown) !=
-        Status::kOk) {
-      raise_fault(FaultCode::kDrivetrainError, now_s,
-                  thrown != nullptr ? thrown : drivetrain_->last_error());
-      // An encoder jump must not stay in the window once the fault is cleared.
-      twist_window_.reset();
-      twist_ok = false;
-    } else if (resuming && end_reading_gap(localization, odometry, now_s)) {
-      // The motion over the gap went into the handed-over covariance, not into the pose.
-    } else if (guarded([&] { return localization.update(odometry, current_); }, thrown) !=
-               Status::kOk) {
-      raise_fault(FaultCode::kLocalizationError, now_s,
-                  thrown != nullptr ? thrown : localization.last_error());
-    } else if (!finite(localization.estimate().pose)) {
-      raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose estimate");
-    } else if (!finite_covariance(localization.estimate())) {
-      raise_fault(FaultCode::kLocalizationError, now_s, "non-finite pose covariance");
-    }
-    if (odometry.valid) check_odometry(odometry, now_s);
-  }
-  if (resuming && reading_gap_.active()) {
-    // Nothing measured over the gap (the hardware was paused, or the drivetrain refused the
-    // increment): the dead-reckoned pose is all there is.
-    (void)end_reading_gap(localization, OdometryIncrement{}, now_s);
-  }
+  // Odometry and localization.
+  const OdometryOutcome odometry =
+      odometry_.update(now_s, read_, reading_ok, state_, has_last_cycle_ ? last_cycle_s_ : now_s,
+                       *drivetrain_, localization, guard_, events_);
 
   // Leaving safe stop: only on request and only in a cycle without a fault.
   if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
-    if (latched_fault_ != FaultCode::kNone) {
-      if (cycle_fault_ == FaultCode::kNone) {
+    if (events_.any_latched()) {
+      if (events_.cycle_fault() == FaultCode::kNone) {
         clear_latched_fault(now_s);
       } else {
         clear_requested_.store(true, std::memory_order_release);
@@ -992,12 +618,12 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     if (finite(incoming.twist) && finite(incoming.received_s)) {
       command_ = incoming;
       has_command_ = true;
-      transient_fault_ = FaultCode::kNone;
+      events_.clear_transient();
     } else {
       has_command_ = false;
-      raise_transient_fault(FaultCode::kNonFiniteCommand, now_s, "non-finite command rejected");
-      log_event(LogLevel::kWarn, LogCode::kCommandRejected, now_s, "non-finite velocity command",
-                static_cast<double>(incoming.sequence));
+      events_.raise_transient(FaultCode::kNonFiniteCommand, now_s, "non-finite command rejected");
+      events_.log(LogLevel::kWarn, LogCode::kCommandRejected, now_s, "non-finite velocity command",
+                  static_cast<double>(incoming.sequence));
     }
   }
   if (stopping_) has_command_ = false;  // shutting down: no command moves the robot again
@@ -1006,7 +632,7 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     // A stream whose last word was a stop (Nav2 after every goal, a teleop released) has
     // simply ended: the robot is idle, not faulty. Only one that went silent mid-motion is.
     if (!is_zero(command_.twist)) {
-      raise_transient_fault(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
+      events_.raise_transient(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
     }
   }
 
@@ -1015,12 +641,12 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   const bool calibrating = step_calibration(now_s, final_stop || stopping_);
   if (calibrating) has_command_ = false;  // velocity commands are ignored meanwhile
   Twist2 target;
-  const bool moving = !calibrating && !final_stop && !stopping_ &&
-                      latched_fault_ == FaultCode::kNone && has_command_;
+  const bool moving =
+      !calibrating && !final_stop && !stopping_ && !events_.any_latched() && has_command_;
   if (moving) target = command_.twist;
   run_samples_.note_command(target);
   Twist2 applied;
-  const HardwareState* basis = reading_ok ? &current_ : (has_previous_ ? &previous_ : nullptr);
+  const HardwareState* basis = reading_ok ? &current : (has_previous ? &previous : nullptr);
   bool zeroed = basis == nullptr && !calibrating;
   if (had_calibration && !calibrating) {
     // The calibration ended this cycle: stop at once rather than through the drivetrain,
@@ -1029,14 +655,14 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
   } else if (basis != nullptr && !calibrating) {
     // The final cycle stops at once: the daemon brings the robot to rest before it.
     const Twist2 limited = final_stop ? Twist2{} : limit(target, !moving, now_s);
-    if (guarded(
+    if (guard_(
             [&] { return drivetrain_->inverse(limited, *basis, period_s_, setpoints_, applied); },
             thrown) != Status::kOk) {
-      raise_fault(FaultCode::kDrivetrainError, now_s,
-                  thrown != nullptr ? thrown : drivetrain_->last_error());
+      events_.raise(FaultCode::kDrivetrainError, now_s,
+                    thrown != nullptr ? thrown : drivetrain_->last_error());
       zeroed = true;
     } else if (!finite(setpoints_) || !finite(applied)) {
-      raise_fault(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
+      events_.raise(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
       zeroed = true;
     } else {
       follow_drivetrain(limited, applied);
@@ -1046,85 +672,51 @@ void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
     write_zero_setpoints();
     applied = Twist2{};
     if (basis != nullptr) {
-      log_event(LogLevel::kWarn, LogCode::kZeroSetpointFallback, now_s,
-                "inverse kinematics failed: zero setpoints written");
+      events_.log(LogLevel::kWarn, LogCode::kZeroSetpointFallback, now_s,
+                  "inverse kinematics failed: zero setpoints written");
     }
   }
   if (calibrating || zeroed || final_stop || (had_calibration && !calibrating)) {
     limiter_->reset(applied);  // the limits start again from what the robot was given
   }
-  if (guarded([&] { return hardware_.write(setpoints_); }, thrown) != Status::kOk) {
+  if (guard_([&] { return hardware_.write(setpoints_); }, thrown) != Status::kOk) {
     hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
-    raise_fault(FaultCode::kHardwareError, now_s, hardware_failure);
+    events_.raise(FaultCode::kHardwareError, now_s, hardware_failure);
   } else {
     last_write_zero_ = all_zero(setpoints_);
   }
-  if (reading_gap_.active()) reading_gap_.advance(applied, now_s);
-  if (reading_ok) {
-    previous_ = current_;
-    has_previous_ = true;
-  }
+  odometry_.advance(applied, now_s);
+  read_.end_cycle(reading_ok);
   // The cycle's boundary: the hardware hears of its failure once, before the next read.
   if (hardware_failure != nullptr && !state_.hardware_in_error) {
     state_.hardware_in_error = true;
-    (void)guarded(
+    (void)guard_(
         [&] {
           hardware_.on_error(hardware_failure);
           return Status::kOk;
         },
         thrown);
-    log_event(LogLevel::kWarn, LogCode::kMessage, now_s, "hardware error state: on_error() called",
-              0.0, 0.0, 0.0, 0.0, hardware_failure);
+    events_.log(LogLevel::kWarn, LogCode::kMessage, now_s,
+                "hardware error state: on_error() called", 0.0, 0.0, 0.0, 0.0, hardware_failure);
   }
 
   // Publish.
   ++state_.cycle;
   state_.stamp_s = now_s;
   state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
-  state_.estimate =
-      reading_gap_.active() ? reading_gap_.estimate() : publishable(localization.estimate());
-  if (twist_ok) {
-    state_.odometry_twist = twist_estimate_.twist;
-    state_.twist_covariance = twist_estimate_.covariance;
-    state_.has_twist_covariance = twist_estimate_.has_covariance;
-    state_.wheel_rate_radps = twist_estimate_.wheel_rate_radps;
-    state_.steer_rate_radps = twist_estimate_.steer_rate_radps;
-    state_.has_joint_rates = true;
-    reading_gap_.forget_twist();
-  } else if (reading_gap_.has_twist()) {
-    state_.odometry_twist = reading_gap_.twist();
-    state_.twist_covariance = reading_gap_.twist_covariance();
-    state_.has_twist_covariance = reading_gap_.has_twist_covariance();
-    state_.has_joint_rates = false;
-  } else {
-    state_.odometry_twist = odometry.valid ? odometry.twist : Twist2{};
-    state_.twist_covariance = {};
-    state_.has_twist_covariance = false;
-    state_.has_joint_rates = false;
-  }
-  state_.odometry_residual = odometry.valid ? odometry.residual : 0.0;
+  odometry_.publish(odometry, localization, state_);
+  swap_.publish(state_);
   state_.command_twist = applied;
-  state_.gyro_wz_radps = reading_ok && current_.gyro_valid ? current_.gyro_wz_radps : 0.0;
+  state_.gyro_wz_radps = reading_ok && current.gyro_valid ? current.gyro_wz_radps : 0.0;
   state_.module_count = module_count_;
   drivetrain_->module_states(std::span<ModuleState>(state_.modules.data(), module_count_));
-  if (latched_fault_ != FaultCode::kNone) {
-    state_.mode = LoopMode::kSafeStop;
-    state_.fault = latched_fault_;
-    state_.fault_detail = latched_detail_;
-  } else {
-    state_.mode = calibrating ? LoopMode::kCalibration
+  events_.publish(calibrating ? LoopMode::kCalibration
                   : moving    ? LoopMode::kVelocity
-                              : LoopMode::kIdle;
-    state_.fault = transient_fault_;
-    if (transient_fault_ == FaultCode::kNone) {
-      state_.fault_detail[0] = '\0';
-    } else {
-      state_.fault_detail = transient_detail_;
-    }
-  }
+                              : LoopMode::kIdle,
+                  state_);
   state_.has_truth = hardware_.ground_truth(state_.truth);
-  state_.wheel_angle_rad = current_.wheel_angle_rad;
-  state_.steer_angle_rad = current_.steer_angle_rad;
+  state_.wheel_angle_rad = current.wheel_angle_rad;
+  state_.steer_angle_rad = current.steer_angle_rad;
   state_.stopping = stopping_;
   snapshot_.write(state_);
   run_samples_.publish(state_, now_s);

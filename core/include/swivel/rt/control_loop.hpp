@@ -76,10 +76,12 @@
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
 #include "swivel/rt/clock_offset.hpp"
-#include "swivel/rt/external_sensors.hpp"
+#include "swivel/rt/external_sensor_stage.hpp"
+#include "swivel/rt/hardware_read_stage.hpp"
 #include "swivel/rt/latest_value.hpp"
-#include "swivel/rt/odometry_monitor.hpp"
-#include "swivel/rt/reading_gap.hpp"
+#include "swivel/rt/loop_events.hpp"
+#include "swivel/rt/odometry_stage.hpp"
+#include "swivel/rt/plugin_guard.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
 #include "swivel/rt/run_sample.hpp"
@@ -87,6 +89,7 @@
 #include "swivel/rt/snapshot_buffer.hpp"
 #include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
+#include "swivel/rt/swap_stage.hpp"
 #include "swivel/rt/timing_stats.hpp"
 #include "swivel/rt/twist_window.hpp"
 
@@ -140,43 +143,8 @@ std::size_t twist_window_readings(const LoopOptions& options);
 /// 2 pi / counts per revolution; the steering only for an swpc robot).
 void set_encoder_resolutions(const RobotModel& robot, LoopOptions& options) noexcept;
 
-/// The robot model's share of the loop's settings: what a model swap replaces.
-struct ModelSettings {
-  MotionLimits limits;  ///< LoopOptions::limits
-  double wheel_encoder_resolution_rad = 0.0;
-  double steer_encoder_resolution_rad = 0.0;
-};
-
 /// The model's settings as the loop takes them (the limits and set_encoder_resolutions()).
 ModelSettings model_settings(const RobotModel& robot) noexcept;
-
-/// Below this every wheel and steering rate measured over the twist window, rad/s, counts
-/// as at rest for a robot-model swap (3.75 mm/s on a 75 mm wheel).
-inline constexpr double kAtRestJointRateRadps = 0.1;
-
-/// How a hot swap the loop took ended (take_retired_localization()).
-struct SwapOutcome {
-  /// True: the incoming instance became active and the outgoing one was retired. False: the
-  /// incoming one refused the hand-over, the outgoing one stays active and the incoming one
-  /// was retired instead.
-  bool taken = true;
-  FaultDetail refusal{};  ///< why it refused: its last_error() or the loop's text
-};
-
-/// A hot swap handed to the loop with request_swap(): a new localization and, for a new
-/// robot model, a new drivetrain with the model's loop settings. The requester owns it and
-/// leaves it alone from request_swap() until take_retired_swap() or withdraw_swap() gives it
-/// back. The loop writes into it what it let go of: after a taken swap the pointers hold the
-/// outgoing instances, after a refused one still the incoming ones (`outcome` says which).
-struct LoopSwap {
-  Localization* localization = nullptr;  ///< configured and reset off the loop; never null
-  ShortName localization_name{};
-  /// Configured for the new model off the loop, with as many modules as the running one;
-  /// null keeps the running drivetrain and `model` is ignored. Taken only at rest.
-  Drivetrain* drivetrain = nullptr;
-  ModelSettings model;
-  SwapOutcome outcome;  ///< written by the loop when it lets go of the swap
-};
 
 /// The loop's answer to request_clear() or request_set_pose().
 struct LoopReply {
@@ -282,21 +250,23 @@ class ControlLoop {
   /// continuous, and on success makes the incoming instances active. False for null, a null
   /// localization, or while an earlier swap has not been given back (take_retired_swap(),
   /// withdraw_swap()).
-  bool request_swap(LoopSwap* swap) noexcept;
+  bool request_swap(LoopSwap* swap) noexcept { return swap_.request(swap); }
 
   /// The swapping thread only. Real-time safe. The swap the loop let go of (taken or
   /// refused, see LoopSwap), or nullptr while there is none; the instances it holds will
   /// never be called again: destroy and unload them.
-  LoopSwap* take_retired_swap() noexcept;
+  LoopSwap* take_retired_swap() noexcept { return swap_.take_retired(); }
 
   /// The swapping thread only. Not real-time safe: may wait for the cycle boundary under
   /// way. Takes back `swap` when the loop has not taken it yet (true: it never will, and its
   /// instances were never called). False when the loop already let go of it or is doing so:
   /// take_retired_swap() then returns it.
-  bool withdraw_swap(LoopSwap* swap) noexcept;
+  bool withdraw_swap(LoopSwap* swap) noexcept { return swap_.withdraw(swap); }
 
   /// request_swap() of a new localization alone. `name` is copied (truncated to ShortName).
-  bool request_localization_swap(Localization* next, const char* name) noexcept;
+  bool request_localization_swap(Localization* next, const char* name) noexcept {
+    return swap_.request_localization(next, name);
+  }
 
   /// The localization instance of the swap the loop let go of (take_retired_swap()), or
   /// nullptr: the outgoing instance, or the incoming one when it refused the hand-over.
@@ -305,15 +275,10 @@ class ControlLoop {
 
   /// Any thread. Real-time safe. True while a requested swap has not been taken, refused or
   /// withdrawn.
-  [[nodiscard]] bool swap_pending() const noexcept {
-    return swap_in_flight_.load(std::memory_order_acquire) &&
-           retired_swap_.load(std::memory_order_acquire) == nullptr;
-  }
+  [[nodiscard]] bool swap_pending() const noexcept { return swap_.pending(); }
 
   /// Any thread. The localization the loop is using now. Real-time safe.
-  [[nodiscard]] Localization* active_localization() const noexcept {
-    return active_localization_.load(std::memory_order_acquire);
-  }
+  [[nodiscard]] Localization* active_localization() const noexcept { return swap_.active(); }
 
   /// The calibrating thread only. Real-time safe. Hands `calibration` (configured off the
   /// loop; it must outlive its hand-back) to the loop, which starts it at its next cycle
@@ -411,18 +376,10 @@ class ControlLoop {
   void thread_main(std::promise<std::string>& scheduling_warning) noexcept;
   void cycle(double now_s, bool final_stop) noexcept;
   void take_pending_swap(double now_s) noexcept;
-  [[nodiscard]] bool at_rest() const noexcept;
   void apply_model(const ModelSettings& model) noexcept;
   void take_pending_calibration(double now_s) noexcept;
   bool step_calibration(double now_s, bool final_stop) noexcept;
   void retire_calibration(CalibrationOutcome outcome, double now_s) noexcept;
-  void raise_fault(FaultCode code, double now_s, const char* detail, double value = 0.0,
-                   double limit = 0.0) noexcept;
-  void check_odometry(const OdometryIncrement& odometry, double now_s) noexcept;
-  void take_external_gyro(double now_s) noexcept;
-  void take_motion_capture(double now_s, bool reading_ok) noexcept;
-  void check_external_sensors(double now_s) noexcept;
-  void raise_transient_fault(FaultCode code, double now_s, const char* text) noexcept;
   void write_zero_setpoints() noexcept;
   bool hold_hardware() noexcept;
   void take_request(double now_s, std::uint64_t& clear_id) noexcept;
@@ -430,13 +387,6 @@ class ControlLoop {
   void clear_latched_fault(double now_s) noexcept;
   Twist2 limit(const Twist2& target, bool stopping, double now_s) noexcept;
   void follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept;
-  bool end_reading_gap(Localization& localization, const OdometryIncrement& measured,
-                       double now_s) noexcept;
-  template <class Call>
-  Status guarded(Call&& call, const char*& thrown) noexcept;
-  void log_event(LogLevel level, LogCode code, double now_s, const char* text, double a = 0.0,
-                 double b = 0.0, double c = 0.0, double d = 0.0,
-                 const char* detail = nullptr) noexcept;
 
   LoopOptions options_;
   double period_s_;
@@ -449,12 +399,7 @@ class ControlLoop {
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> clear_requested_{false};
-  std::atomic<Localization*> active_localization_;
-  // A swap in flight: requested (pending), examined by the loop (neither), let go (retired).
-  std::atomic<bool> swap_in_flight_{false};  // from request_swap() until given back
-  std::atomic<LoopSwap*> pending_swap_{nullptr};
-  std::atomic<LoopSwap*> retired_swap_{nullptr};
-  LoopSwap localization_only_swap_{};  // request_localization_swap()'s
+  SwapStage swap_;  // the active localization; the swapping thread hands swaps to it
   std::atomic<Calibration*> pending_calibration_{nullptr};
   std::atomic<Calibration*> active_calibration_{nullptr};  // written by the loop only
   std::atomic<Calibration*> retired_calibration_{nullptr};
@@ -475,38 +420,20 @@ class ControlLoop {
   LatestValue<LoopRequest> requests_;
   LatestValue<LoopReply> replies_;
   LatestValue<VelocityCommand> commands_;
-  struct MotionCaptureInput {
-    MotionCaptureSample sample;
-    MotionCaptureSource source = MotionCaptureSource::kSwivelTopic;
-  };
-  SpscRing<MotionCaptureInput, 64> motion_capture_;
-  /// Motion-capture samples taken per cycle at most: the ring's capacity.
-  static constexpr std::size_t kMotionCaptureDrainLimit = decltype(motion_capture_)::capacity();
-  SpscRing<GyroSample, 64> gyro_;
-  /// Gyro samples taken per cycle at most, for the same reason.
-  static constexpr std::size_t kGyroDrainLimit = decltype(gyro_)::capacity();
   SnapshotBuffer<StateSnapshot> snapshot_;
   RunSampleStage run_samples_;
   TimingStats timing_;
   RtLog log_;
+  LoopEvents events_{log_};  // faults and log records of the loop thread
 
   // Loop-thread state.
   StateSnapshot state_{};
-  HardwareState previous_{};
-  HardwareState current_{};
-  bool has_previous_ = false;
+  PluginGuard guard_;
+  HardwareReadStage read_;
   ActuatorCommand setpoints_{};
   VelocityCommand command_{};
   bool has_command_ = false;
-  FaultCode latched_fault_ = FaultCode::kNone;    // kSafeStop cause
-  FaultCode transient_fault_ = FaultCode::kNone;  // command timeout / rejected command
-  FaultCode cycle_fault_ = FaultCode::kNone;      // latched fault raised this cycle
-  FaultDetail latched_detail_{};                  // cause of latched_fault_
-  FaultDetail transient_detail_{};                // cause of transient_fault_
-  OdometryMonitor odometry_monitor_;
-  TwistWindow twist_window_;
-  TwistEstimate twist_estimate_{};
-  ReadingGap reading_gap_;                          // odometry while readings are missing
+  OdometryStage odometry_;
   motion::TwistLimiter command_limiter_;            // the robot model's limits
   motion::TwistLimiter stop_limiter_;               // the same, with the stop deceleration
   motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
@@ -517,13 +444,9 @@ class ControlLoop {
   bool stopping_ = false;         // the controlled stop was taken
   double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
-  GyroSample external_gyro_{};    // newest finite external gyro sample
-  bool has_external_gyro_ = false;
-  SensorWatch gyro_watch_;
-  SensorWatch motion_capture_watch_;
+  ExternalSensorStage sensors_;   // the external-sensor thread pushes into its rings
 
   // Non-real-time ownership.
-  std::array<char, sizeof(FaultDetail)> thrown_text_{};  ///< what a plugin last threw (guarded)
   ClockOffset clock_offset_;
   std::mutex clock_mutex_;
   std::condition_variable_any clock_wake_;
