@@ -138,9 +138,9 @@ class RunLogWriter {
   /// Creates (truncates) `path`.
   /// @throws RunLogError when the file cannot be opened or the header is invalid
   ///         (module count outside 2..kMaxModules, or not 2 for a differential robot).
-  RunLogWriter(const std::string& path, const RunLogHeader& header);
+  RunLogWriter(const std::string& path, RunLogHeader header);
   /// Writes to a stream the caller keeps alive. @throws RunLogError as above.
-  RunLogWriter(std::ostream& out, const RunLogHeader& header);
+  RunLogWriter(std::ostream& out, RunLogHeader header);
 
   ~RunLogWriter() = default;
   RunLogWriter(const RunLogWriter&) = delete;

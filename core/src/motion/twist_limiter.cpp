@@ -10,7 +10,8 @@ namespace {
 double clamp_abs(double v, double limit) noexcept { return std::clamp(v, -limit, limit); }
 
 double limit_or_none(const std::optional<double>& v) noexcept {
-  return v && std::isfinite(*v) && *v > 0.0 ? *v : kNoLimit;
+  if (v && std::isfinite(*v) && *v > 0.0) return *v;
+  return kNoLimit;
 }
 
 }  // namespace

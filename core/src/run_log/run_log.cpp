@@ -11,6 +11,7 @@
 #include <ostream>
 #include <string_view>
 #include <system_error>
+#include <utility>
 
 namespace swivel {
 namespace {
@@ -221,7 +222,7 @@ class Parser {
          "'), got '" + std::string(trim(line_)) + "'");
   }
 
-  double number(std::string_view cell, const std::string& column) const {
+  [[nodiscard]] double number(std::string_view cell, const std::string& column) const {
     double value = 0.0;
     const auto r = std::from_chars(cell.data(), cell.data() + cell.size(), value);
     if (cell.empty() || r.ec != std::errc() || r.ptr != cell.data() + cell.size() ||
@@ -354,8 +355,8 @@ RunLogHeader run_log_header(const RobotModel& model) {
   return h;
 }
 
-RunLogWriter::RunLogWriter(const std::string& path, const RunLogHeader& header)
-    : header_(header), path_(path) {
+RunLogWriter::RunLogWriter(const std::string& path, RunLogHeader header)
+    : header_(std::move(header)), path_(path) {
   validate_header(header_, path + ": ");
   file_.open(path, std::ios::out | std::ios::trunc);
   if (!file_) throw RunLogError(path + ": cannot open for writing");
@@ -363,8 +364,8 @@ RunLogWriter::RunLogWriter(const std::string& path, const RunLogHeader& header)
   start();
 }
 
-RunLogWriter::RunLogWriter(std::ostream& out, const RunLogHeader& header)
-    : header_(header), out_(&out), path_("<stream>") {
+RunLogWriter::RunLogWriter(std::ostream& out, RunLogHeader header)
+    : header_(std::move(header)), out_(&out), path_("<stream>") {
   validate_header(header_, path_ + ": ");
   start();
 }

@@ -26,7 +26,8 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-double parse_number(const std::string& text, const std::string& where) {
+// `where` and `key` name the field in an error, built only then.
+double parse_number(const std::string& text, const std::string& where, const std::string& key) {
   std::size_t used = 0;
   double v = 0.0;
   try {
@@ -35,7 +36,7 @@ double parse_number(const std::string& text, const std::string& where) {
     used = 0;
   }
   if (used == 0 || used != text.size() || !std::isfinite(v)) {
-    throw std::invalid_argument(where + ": '" + text + "' is not a finite number");
+    throw std::invalid_argument(where + " " + key + ": '" + text + "' is not a finite number");
   }
   return v;
 }
@@ -63,10 +64,11 @@ std::optional<LockSpec> lock_from_comments(const RunLog& log) {
       field = trim(field);
       const auto space = field.find(' ');
       if (space == std::string::npos) {
+        // Once, on the way out. NOLINTNEXTLINE(performance-inefficient-string-concatenation)
         throw std::invalid_argument(where + ": expected 'key value' pairs, got '" + field + "'");
       }
       const std::string key = field.substr(0, space);
-      const double value = parse_number(trim(field.substr(space + 1)), where + " " + key);
+      const double value = parse_number(trim(field.substr(space + 1)), where, key);
       if (key == "locked_module") {
         if (value < 1.0 || value != std::floor(value)) {
           throw std::invalid_argument(where + ": locked_module must be a module number >= 1");

@@ -100,6 +100,7 @@ void run(const Settings& s) {
   std::vector<NoiseLevel> levels;
   const std::vector<std::string> specs =
       s.noise.empty() ? std::vector<std::string>{"none", "0.1mm,0.05deg", "0.5mm,0.2deg"} : s.noise;
+  levels.reserve(specs.size());
   for (const std::string& spec : specs) levels.push_back(parse_noise(spec));
   const bool bar = s.progress || isatty(fileno(stderr)) != 0;
 

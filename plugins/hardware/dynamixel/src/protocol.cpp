@@ -56,9 +56,9 @@ const char* hardware_error_text(std::uint8_t status) noexcept {
   return "";
 }
 
-PacketBuilder::PacketBuilder(std::uint8_t id, Instruction instruction) noexcept : id_(id) {
+PacketBuilder::PacketBuilder(std::uint8_t id, Instruction instruction) noexcept
+    : raw_size_(1), id_(id) {
   raw_[0] = static_cast<std::uint8_t>(instruction);
-  raw_size_ = 1;
 }
 
 PacketBuilder& PacketBuilder::u8(std::uint8_t value) noexcept {

@@ -15,7 +15,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 namespace {
 
-Bytes to_vector(std::span<const std::uint8_t> s) { return Bytes(s.begin(), s.end()); }
+Bytes to_vector(std::span<const std::uint8_t> s) { return {s.begin(), s.end()}; }
 
 // Feeds `wire` whole; returns the results in order.
 std::vector<dxl::Parser::Result> feed_all(dxl::Parser& parser, const Bytes& wire,
