@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "question_stages.hpp"
@@ -286,6 +288,27 @@ void measure_misfit(const QuestionState& s, QuestionResult& result) {
       misfit_inputs(s.replay, result.residuals_after, s.eval.sigma(), result.residuals_before));
   result.channels =
       channel_gaps(s.replay, s.eval.sigma(), result.residuals_before, result.residuals_after);
+  for (std::size_t c = 0; c < result.channels.size(); ++c) {
+    if (c < s.noise.a.size()) result.channels[c].rest_sigma = std::sqrt(s.noise.a[c]);
+    if (c < s.replay.stated_variance.size() && s.replay.stated_variance[c] > 0.0)
+      result.channels[c].stated_sigma = std::sqrt(s.replay.stated_variance[c]);
+  }
+}
+
+std::vector<NoiseFinding> stated_noise_findings(const QuestionReplay& replay,
+                                                const NoiseModel& noise, double min_ratio) {
+  std::vector<NoiseFinding> findings;
+  for (std::size_t c = 0; c < replay.stated_variance.size() && c < noise.a.size(); ++c) {
+    const double stated = replay.stated_variance[c];
+    if (!(stated > 0.0)) continue;
+    const double ratio = std::sqrt(noise.a[c] / stated);
+    if (!(ratio >= min_ratio)) continue;
+    findings.push_back({replay.channels[c], std::sqrt(noise.a[c]), std::sqrt(stated), ratio,
+                        c < replay.stated_source.size() ? replay.stated_source[c] : ""});
+  }
+  std::sort(findings.begin(), findings.end(),
+            [](const NoiseFinding& x, const NoiseFinding& y) { return x.ratio > y.ratio; });
+  return findings;
 }
 
 }  // namespace detail
@@ -306,7 +329,18 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   result.residuals_before = s.residuals_before;
   result.candidates = detail::candidate_scores(s);
   detail::measure_misfit(s, result);
+  result.noise_findings = detail::stated_noise_findings(s.replay, s.noise, options.min_noise_ratio);
   detail::give_verdict({question, &base, &s.singles, s.chosen, &s.final}, options, result);
+  if (!result.noise_findings.empty()) {
+    const NoiseFinding& f = result.noise_findings.front();
+    std::ostringstream line;
+    line << " Noise larger than the model states: " << f.channel.name << " " << std::setprecision(2)
+         << std::fixed << f.ratio << "x (" << f.source << ")";
+    if (result.noise_findings.size() > 1)
+      line << " and " << result.noise_findings.size() - 1 << " more channel(s)";
+    line << "; effects smaller than that noise stay hidden.";
+    result.summary += line.str();
+  }
   result.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;

@@ -6,6 +6,7 @@
 //   select       the best significant single effect, then a second one if it earns its place;
 //   refit        the selection again with the noise it leaves and its nuisance free;
 //   misfit       what remains, and the tests for what the library does not hold;
+//   noise        the noise the fit took against what the model's sensor figures state;
 //   verdict      no significant gap, named, or unexplained residual, and its summary.
 // What the stages share is QuestionState, passed from one to the next. Internal to the
 // model-gap library: the public interface is question.hpp.
@@ -184,5 +185,10 @@ void select_effects(QuestionState& s, const std::vector<Candidate>& library,
                     const QuestionOptions& options);
 void refit_selection(QuestionState& s, const QuestionOptions& options);
 void measure_misfit(const QuestionState& s, QuestionResult& result);
+
+/// The channels whose fitted noise at rest (`noise`) is at least `min_ratio` times (in sigma)
+/// the replay's stated variance, largest ratio first.
+std::vector<NoiseFinding> stated_noise_findings(const QuestionReplay& replay,
+                                                const NoiseModel& noise, double min_ratio);
 
 }  // namespace swivel::model_gap::detail

@@ -80,11 +80,23 @@ json question_json(const QuestionResult& q) {
         {{"name", c.info.name},
          {"unit", c.info.unit},
          {"noise_sigma", number(c.noise_sigma)},
+         {"rest_sigma", number(c.rest_sigma)},
+         {"stated_sigma", number(c.stated_sigma)},
          {"rms", {{"before", number(c.rms_before)}, {"after", number(c.rms_after)}}},
          {"whitened_rms",
           {{"before", number(c.whitened_rms_before)}, {"after", number(c.whitened_rms_after)}}}});
   }
   j["channels"] = chans;
+  json noise = json::array();
+  for (const auto& f : q.noise_findings) {
+    noise.push_back({{"channel", f.channel.name},
+                     {"unit", f.channel.unit},
+                     {"measured_sigma", number(f.measured_sigma)},
+                     {"stated_sigma", number(f.stated_sigma)},
+                     {"ratio", number(f.ratio)},
+                     {"stated_by", f.source}});
+  }
+  j["noise_findings"] = noise;
   j["wall_time_s"] = q.wall_time_s;
   return j;
 }
@@ -281,6 +293,19 @@ void question_markdown(std::ostringstream& md, const QuestionResult& q, const Qu
        << fmt(c.rms_before) << " | " << fmt(c.rms_after) << " | "
        << ratio(c.rms_before, c.rms_after) << " | " << fmt(c.whitened_rms_before, 3) << " -> "
        << fmt(c.whitened_rms_after, 3) << " |\n";
+  }
+  if (!q.noise_findings.empty()) {
+    md << "\nNoise larger than the model states (the noise every window has, against what the "
+          "model's sensor figures give: the sensors are noisier than the model says, or "
+          "something the library does not hold varies from window to window; the fit took it "
+          "as noise, so effects smaller than it stay hidden):\n\n| channel | measured (1 sigma) | "
+          "stated | ratio | stated by |\n"
+       << "|---|---|---|---|---|\n";
+    for (const auto& f : q.noise_findings) {
+      md << "| " << f.channel.name << " | " << fmt(f.measured_sigma, 3) << " " << f.channel.unit
+         << " | " << fmt(f.stated_sigma, 3) << " | " << fmt(f.ratio, 3) << "x | " << f.source
+         << " |\n";
+    }
   }
   md << "\nTests for what the library does not hold, on the residual that remains (most "
         "significant first; a test at or above "

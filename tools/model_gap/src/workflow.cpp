@@ -123,6 +123,71 @@ double count_floor(double counts_per_rev) {
   return q * q / 6.0;
 }
 
+// What the wheel encoders' quantization adds to a window's heading from the encoders: each
+// wheel's rotation is off by count_floor, and the heading weighs a wheel by r / rho over the
+// wheels (rho the distance of its contact from the reference point, r its radius).
+double encoder_heading_variance(const RobotModel& m) {
+  const double q = count_floor(m.sensors.wheel_encoder_counts_per_rev);
+  if (m.drivetrain == DrivetrainKind::kDifferential) {
+    const DifferentialParams& d = m.differential;
+    const double r2 = 0.5 * (d.wheel_radius_left_m * d.wheel_radius_left_m +
+                             d.wheel_radius_right_m * d.wheel_radius_right_m);
+    return 2.0 * q * r2 / (d.track_width_m * d.track_width_m);
+  }
+  double r2 = 0.0;
+  double rho2 = 0.0;
+  for (const SwpcModuleParams& module : m.modules) {
+    r2 += module.wheel_radius_m * module.wheel_radius_m;
+    rho2 += module.x_m * module.x_m + module.y_m * module.y_m;
+  }
+  return rho2 > 0.0 ? q * r2 / (rho2 * static_cast<double>(m.modules.size())) : 0.0;
+}
+
+// The gyro's stated white noise integrated over a median window, one reading a row.
+double gyro_heading_variance(const RobotModel& m, const SensorReplay& sensors) {
+  const WindowMotion& motion = sensors.motion();
+  std::vector<double> per_window;
+  for (std::size_t j = 0; j < sensors.windows().size(); ++j) {
+    const Window& w = sensors.windows()[j];
+    const double row_s = motion.duration_s[j] / static_cast<double>(w.b - w.a);
+    const double sigma = m.sensors.gyro.noise_rad_s;
+    per_window.push_back(sigma * sigma * row_s * motion.duration_s[j]);
+  }
+  if (per_window.empty()) return 0.0;
+  auto mid = per_window.begin() + static_cast<std::ptrdiff_t>(per_window.size() / 2);
+  std::nth_element(per_window.begin(), mid, per_window.end());
+  return *mid;
+}
+
+std::string figure(const char* name, double value) {
+  std::ostringstream s;
+  s << name << " " << value;
+  return s.str();
+}
+
+// Per channel of the sensor question, the variance per window the model's own figures account
+// for, and which figures those are.
+void state_sensor_noise(const SensorReplay& sensors, const RobotModel& nominal,
+                        QuestionReplay& sq) {
+  const MotionCaptureParams& mocap = nominal.sensors.motion_capture;
+  for (std::size_t c = 0; c < sq.channels.size(); ++c) {
+    if (sq.channels[c].kind == ChannelKind::kPosition) {
+      sq.stated_variance.push_back(position_floor(nominal));
+      sq.stated_source.push_back(figure("motion_capture.position_noise_m", mocap.position_noise_m));
+      continue;
+    }
+    // Channels dx, dy, then the gyro's heading when the run has one, then the encoders'.
+    const bool gyro = sensors.uses_gyro() && c == 2;
+    sq.stated_variance.push_back(
+        heading_floor(nominal) +
+        (gyro ? gyro_heading_variance(nominal, sensors) : encoder_heading_variance(nominal)));
+    sq.stated_source.push_back(figure("motion_capture.yaw_noise_rad", mocap.yaw_noise_rad) + ", " +
+                               (gyro ? figure("gyro.noise_rad_s", nominal.sensors.gyro.noise_rad_s)
+                                     : figure("wheel_encoder_counts_per_rev",
+                                              nominal.sensors.wheel_encoder_counts_per_rev)));
+  }
+}
+
 std::string plus_minus(double value, double sigma, double unit, int precision) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(precision) << value * unit << " +- ";
@@ -171,6 +236,7 @@ QuestionReplay sensor_question_replay(const SensorReplay& sensors, const RobotMo
                                  ? position_floor(nominal)
                                  : heading_floor(nominal));
   }
+  state_sensor_noise(sensors, nominal, sq);
   sq.own_change.resize(sq.channels.size() * w);
   for (std::size_t j = 0; j < w; ++j) {
     const Pose2 change = between(sensors.anchors_start()[j], sensors.anchors_end()[j]);

@@ -101,6 +101,15 @@ CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenE
     out.verdict[i] = q->verdict;
     out.summary[i] = q->summary;
     for (const FittedEffect& f : q->named) out.named[i].push_back(f.name);
+    for (const CandidateScore& c : q->candidates) {
+      if (c.effects.size() == 1 && c.ok && !c.z.empty()) out.single_z[i].push_back(c.z.front());
+    }
+  }
+  for (const NoiseFinding& f : r.sensor.noise_findings)
+    out.noise_findings.push_back(f.channel.name);
+  for (const ChannelGap& c : r.sensor.channels) {
+    if (c.stated_sigma > 0.0)
+      out.max_noise_ratio = std::max(out.max_noise_ratio, c.rest_sigma / c.stated_sigma);
   }
   for (const PoseGap& g : r.pose_gaps) {
     out.position_before_m[index_of(g.question)] = g.final_position_m_before;

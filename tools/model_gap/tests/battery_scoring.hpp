@@ -51,6 +51,14 @@ struct CaseOutcome {
   std::array<std::vector<std::string>, 2> named;   ///< per question: named effects
   std::array<Verdict, 2> verdict = {Verdict::kNoSignificantGap, Verdict::kNoSignificantGap};
   std::array<std::string, 2> summary;
+  /// Sensor question: channels whose noise is larger than the model states (NoiseFinding).
+  std::vector<std::string> noise_findings;
+  /// Sensor question: the largest ratio over channels of the noise every window has to what
+  /// the model's figures state (0 when none is stated).
+  double max_noise_ratio = 0.0;
+  /// Per question: each single-effect candidate's significance (z, a normal deviate under the
+  /// null), for the calibration of clean runs.
+  std::array<std::vector<double>, 2> single_z;
   bool correct = false;  ///< the case's rule holds
   /// Every named hidden effect within 3 sigma of its truth, jointly over its parameters (on
   /// the combinations the run fixes; the rest the workflow leaves at the model's values).

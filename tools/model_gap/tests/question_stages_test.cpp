@@ -191,5 +191,31 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
       << result.summary;
 }
 
+// The noise the fit took, against what the model's sensor figures state: a channel at or
+// above the ratio is reported, largest first, with the figures it was judged against.
+TEST(QuestionNoise, NoiseBeyondTheStatedFiguresIsReported) {
+  QuestionReplay replay;
+  replay.channels = {{"dx", "m"}, {"dyaw", "rad"}, {"dyaw_gyro", "rad"}};
+  replay.stated_variance = {1e-8, 1e-6, 0.0};  // the third states nothing
+  replay.stated_source = {"position 1e-4", "yaw 1e-3", ""};
+  NoiseModel noise;
+  noise.a = {1.5e-8, 2.5e-5, 1.0};  // 1.22x, 5x, unstated
+  noise.b = {1.0, 1.0, 1.0};        // what grows with motion is not judged here
+  const std::vector<NoiseFinding> findings = stated_noise_findings(replay, noise, 2.0);
+  ASSERT_EQ(findings.size(), 1U);
+  EXPECT_EQ(findings[0].channel.name, "dyaw");
+  EXPECT_NEAR(findings[0].ratio, 5.0, 1e-12);
+  EXPECT_NEAR(findings[0].measured_sigma, 5e-3, 1e-12);
+  EXPECT_NEAR(findings[0].stated_sigma, 1e-3, 1e-12);
+  EXPECT_EQ(findings[0].source, "yaw 1e-3");
+
+  noise.a[0] = 9e-8;  // 3x: now two, the larger first
+  const std::vector<NoiseFinding> two = stated_noise_findings(replay, noise, 2.0);
+  ASSERT_EQ(two.size(), 2U);
+  EXPECT_EQ(two[0].channel.name, "dyaw");
+  EXPECT_EQ(two[1].channel.name, "dx");
+  EXPECT_TRUE(stated_noise_findings(replay, noise, 6.0).empty());
+}
+
 }  // namespace
 }  // namespace swivel::model_gap::detail

@@ -15,6 +15,7 @@
 // covariance of fit.hpp), expressed as a normal deviate.
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,9 @@ struct QuestionOptions {
   double min_z_name = 5.0;  ///< significance an effect needs to be named
   double min_z_misfit =
       5.0;  ///< significance at which a misfit test calls the residual unexplained
+  /// Noise at rest this many times (in sigma) what the model's sensor figures give, or more, is
+  /// reported as a NoiseFinding.
+  double min_noise_ratio = 2.0;
   /// Size (noise sigmas, the largest over channels of the RMS change) below which a
   /// significant effect or misfit is still too small to matter.
   double min_effect_size = 0.5;
@@ -75,6 +79,12 @@ struct QuestionReplay {
   std::vector<double> own_change;            ///< channel-major, for the misfit tests
   std::vector<std::vector<double>> noise_x;  ///< [channel][window], NoiseModel's x
   std::vector<double> noise_floor;           ///< per channel, variance
+  /// Per channel, the variance per window the model's own sensor figures account for (motion
+  /// capture at the window's ends, gyro noise, encoder quantization); empty: not stated. The
+  /// fitted noise beyond it is reported (NoiseFinding), never silently taken as noise.
+  std::vector<double> stated_variance;
+  /// Per channel, which of the model's figures the stated variance comes from, for the report.
+  std::vector<std::string> stated_source;
   /// Channel-major variance the replay itself adds in each window for a model and nuisance
   /// values (unset: none), e.g. from not knowing when in its row a step of the commands came.
   /// Measured first on the base model, then again on the selection.
@@ -122,11 +132,25 @@ struct CandidateScore {
   [[nodiscard]] std::string label() const;
 };
 
+/// A channel whose noise at rest (the fitted variance every window has, NoiseModel::a) is
+/// larger than the model's sensor figures account for: the sensors are noisier than the model
+/// says, or something the library does not hold varies from window to window. Either way the
+/// fit took it as noise, and effects smaller than it stay hidden.
+struct NoiseFinding {
+  ChannelInfo channel;
+  double measured_sigma = 0.0;  ///< sqrt(a), channel units per window
+  double stated_sigma = 0.0;    ///< what the model's figures give
+  double ratio = 0.0;           ///< measured / stated
+  std::string source;           ///< the figures, e.g. "motion_capture.yaw_noise_rad 0.001"
+};
+
 /// The gap of one channel before and after.
 struct ChannelGap {
   ChannelInfo info;
   double noise_sigma = 0.0;  ///< median over windows, channel units
-  double rms_before = 0.0;   ///< window residuals, channel units
+  double rest_sigma = 0.0;   ///< what every window has (sqrt of NoiseModel::a)
+  double stated_sigma = std::numeric_limits<double>::quiet_NaN();  ///< the model's figures' part
+  double rms_before = 0.0;  ///< window residuals, channel units
   double rms_after = 0.0;
   double whitened_rms_before = 0.0;
   double whitened_rms_after = 0.0;
@@ -140,9 +164,10 @@ struct QuestionResult {
   std::vector<CandidateScore> candidates;  ///< best BIC first
   std::vector<MisfitTest> misfits;         ///< on the residual that remains, most significant first
   std::vector<ChannelGap> channels;
-  std::vector<double> nuisance;          ///< fitted nuisance values (with the selection)
-  std::vector<double> nuisance_sigmas;   ///< their 1-sigma (infinite: not fixed by the run)
-  std::vector<double> residuals_before;  ///< channel-major, channel units
+  std::vector<NoiseFinding> noise_findings;  ///< largest ratio first
+  std::vector<double> nuisance;              ///< fitted nuisance values (with the selection)
+  std::vector<double> nuisance_sigmas;       ///< their 1-sigma (infinite: not fixed by the run)
+  std::vector<double> residuals_before;      ///< channel-major, channel units
   std::vector<double> residuals_after;
   RobotModel augmented;  ///< base plus the named effects
   double wall_time_s = 0.0;
