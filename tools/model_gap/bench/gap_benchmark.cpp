@@ -147,8 +147,42 @@ void print_figure(const char* name, const validation::Proportion& p) {
               100.0 * p.value(), 100.0 * ci.low, 100.0 * ci.high);
 }
 
+// Under the null (clean runs) a candidate's significance is a normal deviate: the share of
+// candidates at or above each z against the normal's upper tail. Optionally every z with its
+// expected normal quantile, for a quantile plot (tools/lab/null_quantiles.gp).
+void print_null_calibration(const validation::SetFigures& f, const std::string& quantiles_path) {
+  const char* names[2] = {"sensor to pose", "command to motion"};
+  std::FILE* out = quantiles_path.empty() ? nullptr : std::fopen(quantiles_path.c_str(), "w");
+  if (!quantiles_path.empty() && out == nullptr) {
+    std::fprintf(stderr, "swivel-bench-model-gap: cannot write %s\n", quantiles_path.c_str());
+  }
+  for (std::size_t q = 0; q < 2; ++q) {
+    std::vector<double> z = f.clean_single_z[q];
+    if (z.empty()) continue;
+    std::sort(z.begin(), z.end());
+    std::printf("    single candidates' z on clean runs, %s (%zu fits): share at or above",
+                names[q], z.size());
+    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
+      const auto above = static_cast<double>(z.end() - std::lower_bound(z.begin(), z.end(), t));
+      std::printf("  %.0f: %.2f %% (normal %.2f %%)", t,
+                  100.0 * above / static_cast<double>(z.size()),
+                  50.0 * std::erfc(t / std::sqrt(2.0)));
+    }
+    std::printf("\n");
+    if (out == nullptr) continue;
+    std::fprintf(out, "# %s: expected normal quantile, observed z (clean runs)\n", names[q]);
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      const double p = (static_cast<double>(i) + 0.5) / static_cast<double>(z.size());
+      std::fprintf(out, "%.5f %.5f\n", validation::normal_quantile(p), z[i]);
+    }
+    std::fprintf(out, "\n\n");
+  }
+  if (out != nullptr) std::fclose(out);
+}
+
 // The set's figures; the targets' verdicts when `judged`. Returns whether all were met.
-bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, bool judged) {
+bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, bool judged,
+            const std::string& quantiles_path = "") {
   std::printf("\n==== %s: %zu runs ====\n", title.c_str(), outcomes.size());
   print_runs(outcomes);
   print_breakdown(outcomes);
@@ -157,6 +191,21 @@ bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, 
   print_figure("false alarms, either question (clean runs)", f.false_alarm);
   print_figure("  of which sensor to pose", f.sensor_false_alarm);
   print_figure("  of which command to motion", f.command_false_alarm);
+  print_figure("noise larger than the model states (clean runs)", f.clean_noise_finding);
+  print_figure("noise larger than the model states (library and outside runs)",
+               f.effect_noise_finding);
+  if (!f.clean_noise_ratios.empty()) {
+    std::vector<double> r = f.clean_noise_ratios;
+    std::sort(r.begin(), r.end());
+    const auto at = [&r](double q) {
+      return r[static_cast<std::size_t>(q * static_cast<double>(r.size() - 1))];
+    };
+    std::printf(
+        "    clean runs' noise over the stated, largest channel: median %.2fx, 90 %% %.2fx, "
+        "max %.2fx (reported from 2x)\n",
+        at(0.5), at(0.9), r.back());
+  }
+  print_null_calibration(f, quantiles_path);
   print_figure("in-library effects named right, within 3 sigma", f.named_right);
   print_figure("outside effects: no wrong library name", f.outside_right);
   print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);
@@ -231,6 +280,10 @@ int run(int argc, char** argv) {
   app.add_flag("--battery", battery_flag, "the development set only (as --set development)");
   app.add_flag("--subset", subset, "with --battery: the representative subset only");
   app.add_option("--case", ids, "a development case by id (repeatable)");
+  std::string quantiles_path;
+  app.add_option("--null-quantiles", quantiles_path,
+                 "write the clean validation runs' candidate z with their normal quantiles here "
+                 "(tools/lab/null_quantiles.gp plots them)");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-bench-model-gap")) {
     return *exit;
   }
@@ -269,10 +322,10 @@ int run(int argc, char** argv) {
       quick ? sr::validation_set(true, 6, 4, 1)
             : sr::validation_set(false, sr::kValidationCleanRuns, sr::kValidationLibraryRuns,
                                  sr::kValidationOutsideRuns);
-  const bool met =
-      report(quick ? "smoke (second generator, smoke seeds: not the validation set)"
-                   : "validation (second generator, fresh seeds)",
-             run_all(quick ? "smoke" : "validation", validation_jobs(cases), jobs), !quick);
+  const bool met = report(quick ? "smoke (second generator, smoke seeds: not the validation set)"
+                                : "validation (second generator, fresh seeds)",
+                          run_all(quick ? "smoke" : "validation", validation_jobs(cases), jobs),
+                          !quick, quantiles_path);
   if (quick) return 0;
   std::printf("\nvalidation targets: %s\n", met ? "all met" : "MISSED (exit 1)");
   return met ? 0 : 1;

@@ -72,6 +72,12 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         f.false_alarm.add(sensor || command);
         f.sensor_false_alarm.add(sensor);
         f.command_false_alarm.add(command);
+        f.clean_noise_finding.add(!o.noise_findings.empty());
+        if (o.error.empty()) f.clean_noise_ratios.push_back(o.max_noise_ratio);
+        for (std::size_t q = 0; q < 2; ++q) {
+          f.clean_single_z[q].insert(f.clean_single_z[q].end(), o.single_z[q].begin(),
+                                     o.single_z[q].end());
+        }
         f.clean_robots.insert(o.robot);
         (o.swpc ? f.clean_swpc : f.clean_differential) = true;
         f.slowest_clean_rate_hz = std::min(f.slowest_clean_rate_hz, o.row_rate_hz);
@@ -79,6 +85,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         break;
       }
       case battery::RunKind::kLibrary:
+        f.effect_noise_finding.add(!o.noise_findings.empty());
         f.named_right.add(o.correct && o.values_within_3_sigma);
         for (const auto& p : o.params) {
           if (!p.observable()) continue;
@@ -86,7 +93,10 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
           f.within_3_sigma.add(p.deviation() <= 3.0);
         }
         break;
-      case battery::RunKind::kOutside: f.outside_right.add(o.correct); break;
+      case battery::RunKind::kOutside:
+        f.effect_noise_finding.add(!o.noise_findings.empty());
+        f.outside_right.add(o.correct);
+        break;
     }
   }
   if (f.false_alarm.n == 0) f.slowest_clean_rate_hz = 0.0;
@@ -129,6 +139,16 @@ std::vector<TargetResult> judge_targets(const SetFigures& f) {
 
 bool all_met(const std::vector<TargetResult>& results) {
   return std::all_of(results.begin(), results.end(), [](const TargetResult& t) { return t.met; });
+}
+
+double normal_quantile(double p) {
+  double lo = -40.0;
+  double hi = 40.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace swivel::model_gap::validation

@@ -8,6 +8,7 @@
 // A target is met when the observed figure meets it; each figure is printed with its 95 %
 // Wilson interval, and whether the whole interval meets the target is printed beside.
 
+#include <array>
 #include <cstddef>
 #include <set>
 #include <string>
@@ -52,6 +53,13 @@ struct SetFigures {
   Proportion false_alarm;  ///< clean runs where either question is not "no significant gap"
   Proportion sensor_false_alarm;
   Proportion command_false_alarm;
+  /// Clean runs where the sensor question reports noise larger than the model states.
+  Proportion clean_noise_finding;
+  std::vector<double> clean_noise_ratios;  ///< per clean run: CaseOutcome::max_noise_ratio
+  /// Clean runs, per question: every single-effect candidate's z (CaseOutcome::single_z).
+  std::array<std::vector<double>, 2> clean_single_z;
+  /// Runs whose hidden or outside effect left a noise finding (library and outside runs).
+  Proportion effect_noise_finding;
   Proportion named_right;     ///< library runs: correct and values within 3 sigma
   Proportion outside_right;   ///< outside runs: the case's rule holds
   Proportion within_1_sigma;  ///< hidden parameters named and observable
@@ -80,5 +88,8 @@ struct TargetResult {
 std::vector<TargetResult> judge_targets(const SetFigures& f);
 
 bool all_met(const std::vector<TargetResult>& results);
+
+/// The standard normal's quantile at probability p (0 < p < 1), by bisection on std::erfc.
+double normal_quantile(double p);
 
 }  // namespace swivel::model_gap::validation
