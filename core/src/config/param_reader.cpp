@@ -101,8 +101,8 @@ std::string missing(const ParamReader& r, const std::string& key, const std::str
 
 }  // namespace
 
-ParamReader::ParamReader(YAML::Node node, std::string file, std::string path)
-    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
+ParamReader::ParamReader(const YAML::Node& node, std::string file, std::string path)
+    : node_(node), file_(std::move(file)), path_(std::move(path)) {
   if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
     throw ConfigError(location(file_, node_.Mark()) + ": " +
                       (path_.empty() ? std::string("document") : path_) +
@@ -227,7 +227,7 @@ std::string ParamReader::string_or(const std::string& key, const std::string& fa
 
 std::string ParamReader::choice_or(const std::string& key, const std::string& fallback,
                                    const std::vector<std::string>& choices) {
-  const std::string value = string_or(key, fallback);
+  std::string value = string_or(key, fallback);
   if (std::find(choices.begin(), choices.end(), value) != choices.end()) return value;
   std::string list;
   for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
@@ -241,7 +241,7 @@ ParamReader ParamReader::child(const std::string& key) {
   if (value.IsDefined() && !value.IsNull() && !value.IsMap()) {
     fail(key, "expected a mapping, got " + describe(value));
   }
-  return ParamReader(value, file_, full);
+  return {value, file_, full};
 }
 
 YAML::Node ParamReader::sequence(const std::string& key) {
@@ -262,10 +262,11 @@ ParamReader ParamReader::element(const YAML::Node& seq, const std::string& key,
   const std::string base = path_.empty() ? key : path_ + "." + key;
   const YAML::Node item = seq[i];
   if (!item.IsMap()) {
-    throw ConfigError(location(file_, item.Mark()) + ": " + base + "[" + decimal(i) +
-                      "]: expected a mapping, got " + describe(item));
+    throw ConfigError(location(file_, item.Mark()) + ": " + base + "[" +
+                      decimal(static_cast<long long>(i)) + "]: expected a mapping, got " +
+                      describe(item));
   }
-  return ParamReader(item, file_, base + "[" + decimal(i) + "]");
+  return {item, file_, base + "[" + decimal(static_cast<long long>(i)) + "]"};
 }
 
 void ParamReader::finish() const {

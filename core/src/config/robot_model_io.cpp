@@ -3,6 +3,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -12,6 +14,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include "swivel/config/config_error.hpp"
 #include "swivel/config/param_reader.hpp"
@@ -156,7 +159,7 @@ YAML::Node parse_yaml(const std::string& text, const std::string& source_name) {
 std::string num(double value) {
   char buf[64];
   const auto result = std::to_chars(buf, buf + sizeof buf, value);
-  return std::string(buf, result.ptr);
+  return {buf, result.ptr};
 }
 
 // YAML 1.1/1.2 words that a plain scalar would turn into a bool or null.
@@ -164,10 +167,9 @@ bool is_yaml_keyword(const std::string& value) {
   std::string lower;
   for (const char c : value)
     lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (const char* word : {"true", "false", "null", "yes", "no", "on", "off", "y", "n", "~"}) {
-    if (lower == word) return true;
-  }
-  return false;
+  static constexpr std::array<std::string_view, 10> kKeywords = {
+      "true", "false", "null", "yes", "no", "on", "off", "y", "n", "~"};
+  return std::ranges::find(kKeywords, lower) != kKeywords.end();
 }
 
 // Plain scalar when it is safe, else a double-quoted one with every control byte escaped,

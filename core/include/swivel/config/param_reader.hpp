@@ -22,7 +22,7 @@ class ParamReader {
   /// @param file      file name for messages
   /// @param path      key path of `node` for messages ("" at the top, "localization.params")
   /// @throws ConfigError when node is neither a mapping nor null
-  ParamReader(YAML::Node node, std::string file, std::string path);
+  ParamReader(const YAML::Node& node, std::string file, std::string path);
 
   [[nodiscard]] bool has(const std::string& key) const;
 
