@@ -16,23 +16,6 @@
 namespace swivel::rt {
 namespace {
 
-// The controlled stop: the model's limits, with the stop's deceleration on the axes whose
-// model has no acceleration limit.
-MotionLimits stop_limits(const LoopOptions& options) {
-  MotionLimits limits = options.limits;
-  if (!limits.linear_acceleration_mps2) {
-    limits.linear_acceleration_mps2 = options.stop_linear_deceleration_mps2;
-  }
-  if (!limits.angular_acceleration_radps2) {
-    limits.angular_acceleration_radps2 = options.stop_angular_deceleration_radps2;
-  }
-  return limits;
-}
-
-// Below these a drivetrain may fade a small twist out on purpose (swpc near standstill).
-constexpr double kFollowFloorMps = 0.02;
-constexpr double kFollowFloorRadps = 0.02;
-
 TwistWindowOptions twist_window_options(const LoopOptions& options) {
   TwistWindowOptions o;
   o.readings = twist_window_readings(options);
@@ -87,14 +70,16 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
       hardware_(hardware),
       drivetrain_(&drivetrain),
       module_count_(std::min(drivetrain.module_count(), kMaxModules)),
-      swap_(localization, localization_name),
-      run_samples_(options.run_sample_rate_hz > 0.0 ? 1.0 / options.run_sample_rate_hz : 0.0,
-                   1.0 / options.rate_hz),
       timing_(1.0 / options.rate_hz),
+      swap_(localization, localization_name),
+      sensors_(options.external_sensors),
       odometry_(options.odometry_check, twist_window_options(options)),
-      command_limiter_(options.limits),
-      stop_limiter_(stop_limits(options)),
-      sensors_(options.external_sensors) {
+      command_(CommandLimits{options.limits, options.stop_linear_deceleration_mps2,
+                             options.stop_angular_deceleration_radps2, options.command_timeout_s,
+                             1.0 / options.rate_hz}),
+      write_(module_count_, 1.0 / options.rate_hz),
+      publish_(options.run_sample_rate_hz > 0.0 ? 1.0 / options.run_sample_rate_hz : 0.0,
+               1.0 / options.rate_hz) {
   if (!std::isfinite(options.rate_hz) || options.rate_hz <= 0.0 || period_ns_ <= 0) {
     throw std::invalid_argument("loop rate_hz must be finite and positive, got " +
                                 std::to_string(options.rate_hz));
@@ -131,11 +116,12 @@ ControlLoop::ControlLoop(const LoopOptions& options, Hardware& hardware, Drivetr
         "the loop rate " +
         std::to_string(options.rate_hz) + " Hz, got " + std::to_string(options.run_sample_rate_hz));
   }
-  swap_.publish(state_);
-  state_.module_count = module_count_;
-  state_.estimate = localization.estimate();
-  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(state_.stamp_s);
-  snapshot_.write(state_);
+  StateSnapshot& state = publish_.state();
+  swap_.publish(state);
+  state.module_count = module_count_;
+  state.estimate = localization.estimate();
+  state.ros_stamp_ns = clock_offset_.to_realtime_ns(state.stamp_s);
+  publish_.write();
 }
 
 ControlLoop::~ControlLoop() { stop(); }
@@ -215,11 +201,6 @@ void ControlLoop::thread_main(std::promise<std::string>& scheduling_warning) noe
   cycle(monotonic_s(), true);
 }
 
-bool ControlLoop::push_command(const VelocityCommand& command) noexcept {
-  (void)commands_.publish(command);
-  return true;
-}
-
 bool ControlLoop::push_motion_capture(const MotionCaptureSample& sample,
                                       MotionCaptureSource source) noexcept {
   return sensors_.push_motion_capture(sample, source);
@@ -274,59 +255,16 @@ bool ControlLoop::pause_hardware(double timeout_s) noexcept {
   return false;
 }
 
-void ControlLoop::request_controlled_stop(double requested_s) noexcept {
-  bool expected = false;
-  if (controlled_stop_requested_.load(std::memory_order_acquire)) return;
-  controlled_stop_requested_s_.store(requested_s, std::memory_order_relaxed);
-  (void)controlled_stop_requested_.compare_exchange_strong(expected, true,
-                                                           std::memory_order_acq_rel);
-}
-
 void ControlLoop::resume_hardware() noexcept {
   hardware_access_.store(HardwareAccess::kCalling, std::memory_order_release);
-}
-
-bool ControlLoop::start_calibration(Calibration* calibration) noexcept {
-  if (calibration == nullptr) return false;
-  if (calibration_in_flight_.load(std::memory_order_acquire)) return false;
-  calibration_in_flight_.store(true, std::memory_order_release);
-  cancel_calibration_.store(false, std::memory_order_release);
-  pending_calibration_.store(calibration, std::memory_order_release);
-  return true;
-}
-
-void ControlLoop::cancel_calibration() noexcept {
-  if (!calibration_in_flight_.load(std::memory_order_acquire)) return;
-  // Not taken by the loop yet: hand it back directly. At most one instance is in flight,
-  // so the retire slot is empty and the loop will never see this one.
-  if (Calibration* pending = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel)) {
-    retired_outcome_.store(CalibrationOutcome::kCancelled, std::memory_order_relaxed);
-    retired_calibration_.store(pending, std::memory_order_release);
-    return;
-  }
-  cancel_calibration_.store(true, std::memory_order_release);
-}
-
-Calibration* ControlLoop::take_finished_calibration(CalibrationOutcome* outcome) noexcept {
-  Calibration* retired = retired_calibration_.exchange(nullptr, std::memory_order_acq_rel);
-  if (retired == nullptr) return nullptr;
-  if (outcome != nullptr) *outcome = retired_outcome_.load(std::memory_order_relaxed);
-  cancel_calibration_.store(false, std::memory_order_release);
-  calibration_in_flight_.store(false, std::memory_order_release);
-  return retired;
-}
-
-void ControlLoop::write_zero_setpoints() noexcept {
-  setpoints_ = ActuatorCommand{};
-  setpoints_.module_count = module_count_;
 }
 
 // A swap at the cycle boundary. One with a new robot model waits for a cycle at rest: a
 // drivetrain swapped under a moving robot would change its setpoints mid-motion. At rest,
 // no calibration drives the actuators either.
 void ControlLoop::take_pending_swap(double now_s) noexcept {
-  const bool rest = active_calibration_.load(std::memory_order_relaxed) == nullptr &&
-                    at_rest(state_, last_write_zero_, module_count_);
+  const bool rest = calibration_.active() == nullptr &&
+                    at_rest(publish_.state(), write_.last_write_zero(), module_count_);
   ModelSettings model;
   if (swap_.take(now_s, rest, module_count_, drivetrain_, model, guard_, events_)) {
     apply_model(model);
@@ -339,79 +277,8 @@ void ControlLoop::apply_model(const ModelSettings& model) noexcept {
   options_.limits = model.limits;
   options_.wheel_encoder_resolution_rad = model.wheel_encoder_resolution_rad;
   options_.steer_encoder_resolution_rad = model.steer_encoder_resolution_rad;
-  command_limiter_ = motion::TwistLimiter(options_.limits);
-  stop_limiter_ = motion::TwistLimiter(stop_limits(options_));
-  command_limiter_.reset();
-  stop_limiter_.reset();
-  limiter_ = &stop_limiter_;
+  command_.set_limits(model.limits);
   odometry_.set_resolutions(model.wheel_encoder_resolution_rad, model.steer_encoder_resolution_rad);
-}
-
-void ControlLoop::take_pending_calibration(double now_s) noexcept {
-  if (active_calibration_.load(std::memory_order_relaxed) != nullptr) return;
-  Calibration* next = pending_calibration_.exchange(nullptr, std::memory_order_acq_rel);
-  if (next == nullptr) return;
-  active_calibration_.store(next, std::memory_order_release);
-  if (events_.any_latched() || stopping_) {
-    // A robot in safe stop must be cleared before anything moves it; one shutting down stays.
-    retire_calibration(CalibrationOutcome::kRefused, now_s);
-    return;
-  }
-  has_command_ = false;
-  events_.log(LogLevel::kInfo, LogCode::kMessage, now_s, "calibration started");
-}
-
-void ControlLoop::retire_calibration(CalibrationOutcome outcome, double now_s) noexcept {
-  Calibration* outgoing = active_calibration_.load(std::memory_order_relaxed);
-  if (outgoing == nullptr) return;
-  retired_outcome_.store(outcome, std::memory_order_relaxed);
-  // start_calibration() refuses while an instance is in flight, so the slot is empty here.
-  retired_calibration_.store(outgoing, std::memory_order_release);
-  active_calibration_.store(nullptr, std::memory_order_release);
-  has_command_ = false;  // only a command sent after the calibration moves the robot
-  events_.log(outcome == CalibrationOutcome::kFinished ? LogLevel::kInfo : LogLevel::kWarn,
-              LogCode::kMessage, now_s,
-              outcome == CalibrationOutcome::kFinished    ? "calibration finished"
-              : outcome == CalibrationOutcome::kCancelled ? "calibration cancelled"
-              : outcome == CalibrationOutcome::kRefused
-                  ? "calibration refused: fault latched or stopping"
-                  : "calibration stopped by a fault");
-}
-
-// One cycle of an active calibration. Returns true while it drives the actuators this cycle
-// (setpoints_ filled); false when there is none or it ended this cycle (the caller writes
-// zero setpoints).
-bool ControlLoop::step_calibration(double now_s, bool final_stop) noexcept {
-  Calibration* calibration = active_calibration_.load(std::memory_order_relaxed);
-  if (calibration == nullptr) return false;
-  if (final_stop || cancel_calibration_.exchange(false, std::memory_order_acq_rel)) {
-    retire_calibration(CalibrationOutcome::kCancelled, now_s);
-    if (!final_stop)
-      events_.raise_transient(FaultCode::kCalibrationError, now_s, "calibration cancelled");
-    return false;
-  }
-  if (events_.any_latched()) {
-    retire_calibration(CalibrationOutcome::kFailed, now_s);
-    return false;
-  }
-  const char* thrown = nullptr;
-  const Status status =
-      guard_([&] { return calibration->step(read_.current(), setpoints_); }, thrown);
-  if (status != Status::kOk) {
-    events_.raise(FaultCode::kCalibrationError, now_s,
-                  thrown != nullptr ? thrown : calibration->last_error());
-  } else if (setpoints_.module_count != module_count_ || !finite(setpoints_)) {
-    events_.raise(FaultCode::kCalibrationError, now_s, "invalid calibration setpoints");
-  } else if (calibration->failed()) {
-    events_.raise(FaultCode::kCalibrationError, now_s, calibration->last_error());
-  } else if (calibration->finished()) {
-    retire_calibration(CalibrationOutcome::kFinished, now_s);
-    return false;
-  } else {
-    return true;
-  }
-  retire_calibration(CalibrationOutcome::kFailed, now_s);
-  return false;
 }
 
 void ControlLoop::run_cycle(double now_s) noexcept { cycle(now_s, false); }
@@ -427,7 +294,7 @@ bool ControlLoop::hold_hardware() noexcept {
                                                      std::memory_order_acq_rel);
       return false;
     }
-    if (!last_write_zero_) return false;  // still stopping: granted once at rest
+    if (!write_.last_write_zero()) return false;  // still stopping: granted once at rest
     if (hardware_access_.compare_exchange_strong(access, HardwareAccess::kPaused,
                                                  std::memory_order_acq_rel)) {
       access = HardwareAccess::kPaused;
@@ -478,8 +345,8 @@ void ControlLoop::take_request(double now_s, std::uint64_t& clear_id) noexcept {
 // Leaves the latched fault (both clear paths).
 void ControlLoop::clear_latched_fault(double now_s) noexcept {
   events_.clear_latched(now_s);
-  state_.hardware_in_error = false;
-  has_command_ = false;  // only a command that arrives from now on moves the robot
+  write_.clear_hardware_error();
+  command_.drop();  // only a command that arrives from now on moves the robot
 }
 
 void ControlLoop::answer_clear(std::uint64_t id, double now_s) noexcept {
@@ -508,220 +375,85 @@ void ControlLoop::answer_clear(std::uint64_t id, double now_s) noexcept {
   (void)replies_.publish(reply);
 }
 
-Twist2 ControlLoop::limit(const Twist2& target, bool stopping, double now_s) noexcept {
-  motion::TwistLimiter& limiter = stopping ? stop_limiter_ : command_limiter_;
-  if (&limiter != limiter_) {
-    limiter.continue_from(*limiter_);
-    limiter_ = &limiter;
-  }
-  if (!limiter.active()) {
-    limiter.reset(target);
-    return target;
-  }
-  // The time that really passed, so that a late cycle does not stretch a stop. Towards a
-  // command it is bounded, so that a stalled loop does not make the twist jump up; a stop
-  // only ever moves towards zero, so it takes all of it.
-  double dt_s = period_s_;
-  if (has_last_cycle_ && now_s > last_cycle_s_) {
-    dt_s = stopping ? now_s - last_cycle_s_ : std::min(now_s - last_cycle_s_, 10.0 * period_s_);
-  }
-  if (stopping && stop_catch_up_s_ != 0.0) {
-    dt_s = std::max(dt_s + stop_catch_up_s_, 0.0);
-    stop_catch_up_s_ = 0.0;
-  }
-  return limiter.step(target, dt_s);
-}
-
-// The drivetrain scaled the twist down to its own wheel or steering limits: the limiter
-// continues from what the robot was commanded, so that a later stop ramps down from the
-// robot's speed and not from one it never reached. Below the floors a drivetrain may fade a
-// small twist out on purpose; following it there would keep the robot from ever starting.
-void ControlLoop::follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept {
-  const auto follow = [](motion::AxisLimiter& axis, double wanted, double got, double floor) {
-    if (std::abs(wanted) >= floor && std::abs(got) < std::abs(wanted) * (1.0 - 1e-9)) {
-      axis.reset(got);
+// Leaving safe stop: only on request and only in a cycle without a fault.
+void ControlLoop::take_clear(double now_s, std::uint64_t clear_id) noexcept {
+  if (clear_requested_.exchange(false, std::memory_order_acq_rel) && events_.any_latched()) {
+    if (events_.cycle_fault() == FaultCode::kNone) {
+      clear_latched_fault(now_s);
+    } else {
+      clear_requested_.store(true, std::memory_order_release);
     }
-  };
-  follow(limiter_->x(), limited.vx_mps, applied.vx_mps, kFollowFloorMps);
-  follow(limiter_->y(), limited.vy_mps, applied.vy_mps, kFollowFloorMps);
-  follow(limiter_->wz(), limited.wz_radps, applied.wz_radps, kFollowFloorRadps);
+  }
+  if (clear_pending_) answer_clear(clear_id, now_s);
 }
 
 void ControlLoop::cycle(double now_s, bool final_stop) noexcept {
-  events_.begin_cycle(state_.cycle);
+  events_.begin_cycle(publish_.state().cycle);
+  const CycleTime time{now_s, has_last_cycle_, last_cycle_s_};
   if (!final_stop && hold_hardware()) {
     // Paused for a lifecycle call off the loop: no hardware call; the robot is stopped.
-    ++state_.cycle;
-    state_.stamp_s = now_s;
-    state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
-    state_.odometry_twist = Twist2{};
-    state_.has_twist_covariance = false;
-    state_.twist_covariance = {};
-    state_.has_joint_rates = false;
-    state_.command_twist = Twist2{};
-    snapshot_.write(state_);
-    last_cycle_s_ = now_s;
-    has_last_cycle_ = true;
+    publish_.publish_paused(now_s, clock_offset_.to_realtime_ns(now_s));
+    end_cycle(now_s);
     return;
   }
-  if (!stopping_ && controlled_stop_requested_.load(std::memory_order_acquire)) {
-    stopping_ = true;
-    // The setpoint about to be written holds for a period, and the last one has held since
-    // the request: the first step decelerates for both, so that the stop brakes as if it had
-    // begun at the request and each setpoint were the ramp's value mid-period.
-    const double since_request_s =
-        now_s - controlled_stop_requested_s_.load(std::memory_order_relaxed);
-    stop_catch_up_s_ = std::max(since_request_s, 0.0) + 0.5 * period_s_ -
-                       (has_last_cycle_ ? std::max(now_s - last_cycle_s_, 0.0) : period_s_);
-    events_.log(LogLevel::kInfo, LogCode::kMessage, now_s,
-                "controlled stop: commands ignored, bringing the robot to rest");
-  }
+
+  // Boundary work: the controlled stop, a swap, a calibration, a clear or set-pose request.
+  command_.take_stop_request(time, events_);
   take_pending_swap(now_s);
-  take_pending_calibration(now_s);
+  calibration_.take_pending(now_s, command_.stopping(), command_, events_);
   std::uint64_t clear_id = 0;
   clear_pending_ = false;
   take_request(now_s, clear_id);
   Localization& localization = *swap_.active();
 
-  // Read and check the hardware.
+  // Read and check the hardware; odometry and localization.
   const ReadOutcome read = read_.read(now_s, hardware_, sensors_, guard_, events_);
-  const bool reading_ok = read.ok;
-  const char* hardware_failure = read.failure;  // cause of a hardware fault in this cycle
-  const char* thrown = nullptr;
   const HardwareState& current = read_.current();
-  const HardwareState& previous = read_.previous();
-  const bool has_previous = read_.has_previous();
-  if (reading_ok && current.motion_capture.valid) {
-    run_samples_.note_motion_capture(current.motion_capture);
+  if (read.ok && current.motion_capture.valid) {
+    publish_.run_samples().note_motion_capture(current.motion_capture);
   }
+  const OdometryOutcome odometry = odometry_.update(now_s, read_, read.ok, publish_.state(),
+                                                    has_last_cycle_ ? last_cycle_s_ : now_s,
+                                                    *drivetrain_, localization, guard_, events_);
+  take_clear(now_s, clear_id);
 
-  // Odometry and localization.
-  const OdometryOutcome odometry =
-      odometry_.update(now_s, read_, reading_ok, state_, has_last_cycle_ ? last_cycle_s_ : now_s,
-                       *drivetrain_, localization, guard_, events_);
+  // Mode and command: the newest velocity command, or a calibration's own setpoints.
+  command_.take_command(now_s, events_);
+  WriteRequest request;
+  const bool had_calibration = calibration_.active() != nullptr;
+  request.calibrating =
+      calibration_.step(now_s, final_stop || command_.stopping(), current, module_count_,
+                        write_.setpoints(), command_, guard_, events_);
+  if (request.calibrating) command_.drop();  // velocity commands are ignored meanwhile
+  request.calibration_ended = had_calibration && !request.calibrating;
+  request.final_stop = final_stop;
+  request.moving = command_.moving(request.calibrating || final_stop || events_.any_latched());
+  if (request.moving) request.target = command_.command_twist();
+  publish_.run_samples().note_command(request.target);
 
-  // Leaving safe stop: only on request and only in a cycle without a fault.
-  if (clear_requested_.exchange(false, std::memory_order_acq_rel)) {
-    if (events_.any_latched()) {
-      if (events_.cycle_fault() == FaultCode::kNone) {
-        clear_latched_fault(now_s);
-      } else {
-        clear_requested_.store(true, std::memory_order_release);
-      }
-    }
-  }
-  if (clear_pending_) answer_clear(clear_id, now_s);
-
-  // Newest velocity command (one per cycle at most: the slot keeps only the newest).
-  VelocityCommand incoming;
-  if (commands_.take(incoming) && !stopping_) {
-    if (finite(incoming.twist) && finite(incoming.received_s)) {
-      command_ = incoming;
-      has_command_ = true;
-      events_.clear_transient();
-    } else {
-      has_command_ = false;
-      events_.raise_transient(FaultCode::kNonFiniteCommand, now_s, "non-finite command rejected");
-      events_.log(LogLevel::kWarn, LogCode::kCommandRejected, now_s, "non-finite velocity command",
-                  static_cast<double>(incoming.sequence));
-    }
-  }
-  if (stopping_) has_command_ = false;  // shutting down: no command moves the robot again
-  if (has_command_ && now_s - command_.received_s > options_.command_timeout_s) {
-    has_command_ = false;
-    // A stream whose last word was a stop (Nav2 after every goal, a teleop released) has
-    // simply ended: the robot is idle, not faulty. Only one that went silent mid-motion is.
-    if (!is_zero(command_.twist)) {
-      events_.raise_transient(FaultCode::kCommandTimeout, now_s, "velocity command timed out");
-    }
-  }
-
-  // Command -> limits -> setpoints -> hardware. A calibration writes module setpoints itself.
-  const bool had_calibration = active_calibration_.load(std::memory_order_relaxed) != nullptr;
-  const bool calibrating = step_calibration(now_s, final_stop || stopping_);
-  if (calibrating) has_command_ = false;  // velocity commands are ignored meanwhile
-  Twist2 target;
-  const bool moving =
-      !calibrating && !final_stop && !stopping_ && !events_.any_latched() && has_command_;
-  if (moving) target = command_.twist;
-  run_samples_.note_command(target);
-  Twist2 applied;
-  const HardwareState* basis = reading_ok ? &current : (has_previous ? &previous : nullptr);
-  bool zeroed = basis == nullptr && !calibrating;
-  if (had_calibration && !calibrating) {
-    // The calibration ended this cycle: stop at once rather than through the drivetrain,
-    // whose state lags behind the procedure's setpoints.
-    write_zero_setpoints();
-  } else if (basis != nullptr && !calibrating) {
-    // The final cycle stops at once: the daemon brings the robot to rest before it.
-    const Twist2 limited = final_stop ? Twist2{} : limit(target, !moving, now_s);
-    if (guard_(
-            [&] { return drivetrain_->inverse(limited, *basis, period_s_, setpoints_, applied); },
-            thrown) != Status::kOk) {
-      events_.raise(FaultCode::kDrivetrainError, now_s,
-                    thrown != nullptr ? thrown : drivetrain_->last_error());
-      zeroed = true;
-    } else if (!finite(setpoints_) || !finite(applied)) {
-      events_.raise(FaultCode::kDrivetrainError, now_s, "non-finite setpoints");
-      zeroed = true;
-    } else {
-      follow_drivetrain(limited, applied);
-    }
-  }
-  if (zeroed) {
-    write_zero_setpoints();
-    applied = Twist2{};
-    if (basis != nullptr) {
-      events_.log(LogLevel::kWarn, LogCode::kZeroSetpointFallback, now_s,
-                  "inverse kinematics failed: zero setpoints written");
-    }
-  }
-  if (calibrating || zeroed || final_stop || (had_calibration && !calibrating)) {
-    limiter_->reset(applied);  // the limits start again from what the robot was given
-  }
-  if (guard_([&] { return hardware_.write(setpoints_); }, thrown) != Status::kOk) {
-    hardware_failure = thrown != nullptr ? thrown : hardware_.last_error();
-    events_.raise(FaultCode::kHardwareError, now_s, hardware_failure);
-  } else {
-    last_write_zero_ = all_zero(setpoints_);
-  }
+  // Limits -> setpoints -> hardware.
+  request.basis = read.ok ? &current : (read_.has_previous() ? &read_.previous() : nullptr);
+  const char* hardware_failure = read.failure;  // cause of a hardware fault in this cycle
+  const Twist2 applied = write_.write(request, time, *drivetrain_, hardware_, command_, guard_,
+                                      events_, hardware_failure);
   odometry_.advance(applied, now_s);
-  read_.end_cycle(reading_ok);
+  read_.end_cycle(read.ok);
   // The cycle's boundary: the hardware hears of its failure once, before the next read.
-  if (hardware_failure != nullptr && !state_.hardware_in_error) {
-    state_.hardware_in_error = true;
-    (void)guard_(
-        [&] {
-          hardware_.on_error(hardware_failure);
-          return Status::kOk;
-        },
-        thrown);
-    events_.log(LogLevel::kWarn, LogCode::kMessage, now_s,
-                "hardware error state: on_error() called", 0.0, 0.0, 0.0, 0.0, hardware_failure);
-  }
+  write_.report_hardware_failure(hardware_failure, now_s, hardware_, guard_, events_);
 
   // Publish.
-  ++state_.cycle;
-  state_.stamp_s = now_s;
-  state_.ros_stamp_ns = clock_offset_.to_realtime_ns(now_s);
-  odometry_.publish(odometry, localization, state_);
-  swap_.publish(state_);
-  state_.command_twist = applied;
-  state_.gyro_wz_radps = reading_ok && current.gyro_valid ? current.gyro_wz_radps : 0.0;
-  state_.module_count = module_count_;
-  drivetrain_->module_states(std::span<ModuleState>(state_.modules.data(), module_count_));
-  events_.publish(calibrating ? LoopMode::kCalibration
-                  : moving    ? LoopMode::kVelocity
-                              : LoopMode::kIdle,
-                  state_);
-  state_.has_truth = hardware_.ground_truth(state_.truth);
-  state_.wheel_angle_rad = current.wheel_angle_rad;
-  state_.steer_angle_rad = current.steer_angle_rad;
-  state_.stopping = stopping_;
-  snapshot_.write(state_);
-  run_samples_.publish(state_, now_s);
-  last_cycle_s_ = now_s;
-  has_last_cycle_ = true;
+  StateSnapshot& state = publish_.state();
+  odometry_.publish(odometry, localization, state);
+  swap_.publish(state);
+  events_.publish(request.calibrating ? LoopMode::kCalibration
+                  : request.moving    ? LoopMode::kVelocity
+                                      : LoopMode::kIdle,
+                  state);
+  state.hardware_in_error = write_.hardware_in_error();
+  publish_.publish(CycleReport{now_s, clock_offset_.to_realtime_ns(now_s), applied, &current,
+                               read.ok, module_count_, command_.stopping()},
+                   *drivetrain_, hardware_);
+  end_cycle(now_s);
 }
 
 }  // namespace swivel::rt

@@ -3,7 +3,12 @@
 // The real-time loop (docs/architecture.md "One cycle of the loop"). One thread at a fixed period
 // runs: hot swap (if requested) -> read hardware -> reject non-finite readings -> drivetrain
 // forward -> localization update -> newest velocity command -> motion limits -> drivetrain
-// inverse -> write hardware -> publish a StateSnapshot -> record timing.
+// inverse -> write hardware -> publish a StateSnapshot -> record timing. cycle() only orders
+// the steps: each is a stage of its own type and file (swivel/rt/*_stage.hpp), with its tests:
+// SwapStage and CalibrationStage at the cycle boundary, HardwareReadStage with
+// ExternalSensorStage, OdometryStage, CommandStage (mode and command limits), WriteStage and
+// PublishStage (snapshot and run samples). They share LoopEvents (faults and log records) and
+// PluginGuard (the boundary around every plugin call).
 //
 // Motion limits: every velocity command goes through a motion::TwistLimiter with the robot
 // model's `limits:` (LoopOptions::limits). Whenever the loop itself stops the robot (a
@@ -75,23 +80,25 @@
 #include "swivel/plugin/drivetrain.hpp"
 #include "swivel/plugin/hardware.hpp"
 #include "swivel/plugin/localization.hpp"
+#include "swivel/rt/calibration_stage.hpp"
 #include "swivel/rt/clock_offset.hpp"
+#include "swivel/rt/command_stage.hpp"
 #include "swivel/rt/external_sensor_stage.hpp"
 #include "swivel/rt/hardware_read_stage.hpp"
 #include "swivel/rt/latest_value.hpp"
 #include "swivel/rt/loop_events.hpp"
 #include "swivel/rt/odometry_stage.hpp"
 #include "swivel/rt/plugin_guard.hpp"
+#include "swivel/rt/publish_stage.hpp"
 #include "swivel/rt/realtime.hpp"
 #include "swivel/rt/rt_log.hpp"
 #include "swivel/rt/run_sample.hpp"
 #include "swivel/rt/run_sample_stage.hpp"
-#include "swivel/rt/snapshot_buffer.hpp"
-#include "swivel/rt/spsc_ring.hpp"
 #include "swivel/rt/state_snapshot.hpp"
 #include "swivel/rt/swap_stage.hpp"
 #include "swivel/rt/timing_stats.hpp"
 #include "swivel/rt/twist_window.hpp"
+#include "swivel/rt/write_stage.hpp"
 
 namespace swivel::rt {
 
@@ -156,15 +163,6 @@ struct LoopReply {
   FaultDetail detail{};  ///< the cleared or persisting fault's cause, or why a pose was refused
 };
 
-/// How a calibration handed back by the loop ended.
-enum class CalibrationOutcome : std::uint8_t {
-  kNone = 0,       ///< nothing handed back
-  kFinished = 1,   ///< every run recorded: analyse it
-  kFailed = 2,     ///< the procedure or another fault stopped it
-  kCancelled = 3,  ///< cancel_calibration() or the loop stopping
-  kRefused = 4,    ///< a fault was latched when the loop would have started it
-};
-
 // Its buffers are cache-line aligned so that the loop and the other threads do not share
 // lines: the padding is the point.
 // NOLINTNEXTLINE(clang-analyzer-optin.performance.Padding)
@@ -201,7 +199,10 @@ class ControlLoop {
   /// `command` into a latest-value slot: the loop takes the newest command at its next cycle,
   /// and a command it has not taken yet is replaced (under a flood the newest, e.g. a stop,
   /// always wins). Always true (accepted).
-  bool push_command(const VelocityCommand& command) noexcept;
+  bool push_command(const VelocityCommand& command) noexcept {
+    command_.push(command);
+    return true;
+  }
 
   /// The external-sensor thread only (single producer). Real-time safe. The loop hands the
   /// newest sample to the localization as HardwareState::motion_capture when the hardware
@@ -221,22 +222,24 @@ class ControlLoop {
   /// sample not taken yet (LoopOptions::run_sample_rate_hz); false when there is none. The
   /// ring holds kRunSampleRingCapacity samples (5 s at 100 Hz): a consumer that falls further
   /// behind loses the newest ones, which shows as a jump in RunSample::sequence.
-  bool take_run_sample(RunSample& out) noexcept { return run_samples_.take(out); }
+  bool take_run_sample(RunSample& out) noexcept { return publish_.run_samples().take(out); }
 
   /// Any thread. Run samples the loop could not hand over because the ring was full.
   [[nodiscard]] std::uint64_t run_samples_dropped() const noexcept {
-    return run_samples_.dropped();
+    return publish_.run_samples().dropped();
   }
 
   /// Any thread. The time between two run samples the loop produces, s; 0 when it produces
   /// none.
-  [[nodiscard]] double run_sample_period_s() const noexcept { return run_samples_.period_s(); }
+  [[nodiscard]] double run_sample_period_s() const noexcept {
+    return publish_.run_samples().period_s();
+  }
 
   static constexpr std::size_t kRunSampleRingCapacity = RunSampleStage::kRingCapacity;
 
   /// Any thread. Real-time safe (lock-free; retries while the loop writes). The state at the
   /// end of the newest cycle.
-  [[nodiscard]] StateSnapshot latest() const noexcept { return snapshot_.read(); }
+  [[nodiscard]] StateSnapshot latest() const noexcept { return publish_.latest(); }
 
   /// Any non-real-time thread (walks the histograms). Timing of the loop thread's cycles.
   [[nodiscard]] TimingReport timing() const { return timing_.report(); }
@@ -284,28 +287,28 @@ class ControlLoop {
   /// loop; it must outlive its hand-back) to the loop, which starts it at its next cycle
   /// boundary. False for null or while a previous calibration has not been handed back
   /// with take_finished_calibration().
-  bool start_calibration(Calibration* calibration) noexcept;
+  bool start_calibration(Calibration* calibration) noexcept {
+    return calibration_.start(calibration);
+  }
 
   /// The calibrating thread only. Real-time safe. Stops a running calibration with zero
   /// setpoints at the next cycle (mode kIdle); one not yet taken by the loop is handed back
   /// at once. Does nothing when no calibration is in flight.
-  void cancel_calibration() noexcept;
+  void cancel_calibration() noexcept { calibration_.cancel(); }
 
   /// The calibrating thread only. Real-time safe. The calibration the loop let go of (it
   /// will never be called again: analyse it and destroy it off the loop), or nullptr while
   /// none is; `outcome` (optional) receives how it ended.
-  Calibration* take_finished_calibration(CalibrationOutcome* outcome = nullptr) noexcept;
+  Calibration* take_finished_calibration(CalibrationOutcome* outcome = nullptr) noexcept {
+    return calibration_.take_finished(outcome);
+  }
 
   /// Any thread. Real-time safe. True from start_calibration() until the instance is
   /// taken back.
-  [[nodiscard]] bool calibration_in_flight() const noexcept {
-    return calibration_in_flight_.load(std::memory_order_acquire);
-  }
+  [[nodiscard]] bool calibration_in_flight() const noexcept { return calibration_.in_flight(); }
 
   /// Any thread. Real-time safe. The calibration the loop is running now, or nullptr.
-  [[nodiscard]] Calibration* active_calibration() const noexcept {
-    return active_calibration_.load(std::memory_order_acquire);
-  }
+  [[nodiscard]] Calibration* active_calibration() const noexcept { return calibration_.active(); }
 
   /// Any thread. Real-time safe. Requests leaving kSafeStop: honoured at the first cycle
   /// without a fault (the request waits while the cause persists). Ignored when no fault
@@ -350,7 +353,7 @@ class ControlLoop {
   /// shutting down. `requested_s` (the loop's clock, now_s()) is when the stop was asked
   /// for: the deceleration counts from then, not from the cycle that takes the request.
   /// Later calls change nothing.
-  void request_controlled_stop(double requested_s) noexcept;
+  void request_controlled_stop(double requested_s) noexcept { command_.request_stop(requested_s); }
 
   /// Runs one cycle on the calling thread at monotonic time `now_s` (tests, benchmarks).
   /// Real-time safe. Must not be called while the loop thread runs. Does not record timing.
@@ -377,16 +380,15 @@ class ControlLoop {
   void cycle(double now_s, bool final_stop) noexcept;
   void take_pending_swap(double now_s) noexcept;
   void apply_model(const ModelSettings& model) noexcept;
-  void take_pending_calibration(double now_s) noexcept;
-  bool step_calibration(double now_s, bool final_stop) noexcept;
-  void retire_calibration(CalibrationOutcome outcome, double now_s) noexcept;
-  void write_zero_setpoints() noexcept;
   bool hold_hardware() noexcept;
   void take_request(double now_s, std::uint64_t& clear_id) noexcept;
+  void take_clear(double now_s, std::uint64_t clear_id) noexcept;
   void answer_clear(std::uint64_t id, double now_s) noexcept;
   void clear_latched_fault(double now_s) noexcept;
-  Twist2 limit(const Twist2& target, bool stopping, double now_s) noexcept;
-  void follow_drivetrain(const Twist2& limited, const Twist2& applied) noexcept;
+  void end_cycle(double now_s) noexcept {
+    last_cycle_s_ = now_s;
+    has_last_cycle_ = true;
+  }
 
   LoopOptions options_;
   double period_s_;
@@ -395,20 +397,11 @@ class ControlLoop {
   Drivetrain* drivetrain_;  // the loop's; replaced by a model swap
   std::uint32_t module_count_;
 
-  // Cross-thread state.
+  // Cross-thread state; the stages below hold their own (rings, slots, swap and calibration
+  // hand-over).
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> clear_requested_{false};
-  SwapStage swap_;  // the active localization; the swapping thread hands swaps to it
-  std::atomic<Calibration*> pending_calibration_{nullptr};
-  std::atomic<Calibration*> active_calibration_{nullptr};  // written by the loop only
-  std::atomic<Calibration*> retired_calibration_{nullptr};
-  std::atomic<CalibrationOutcome> retired_outcome_{CalibrationOutcome::kNone};
-  std::atomic<bool> calibration_in_flight_{false};  // written by the calibrating thread
-  std::atomic<bool> cancel_calibration_{false};
-  std::atomic<bool> controlled_stop_requested_{false};
-  std::atomic<double> controlled_stop_requested_s_{0.0};  // written before the flag
-  static_assert(std::atomic<double>::is_always_lock_free);
   // Hardware pause handshake (pause_hardware()): requester -> loop -> requester.
   enum class HardwareAccess : std::uint8_t { kCalling, kPauseRequested, kPaused, kPauseRefused };
   std::atomic<HardwareAccess> hardware_access_{HardwareAccess::kCalling};
@@ -419,32 +412,26 @@ class ControlLoop {
   };
   LatestValue<LoopRequest> requests_;
   LatestValue<LoopReply> replies_;
-  LatestValue<VelocityCommand> commands_;
-  SnapshotBuffer<StateSnapshot> snapshot_;
-  RunSampleStage run_samples_;
   TimingStats timing_;
   RtLog log_;
-  LoopEvents events_{log_};  // faults and log records of the loop thread
+
+  // The stages, in the order a cycle runs them (docs/architecture.md "One cycle of the loop").
+  LoopEvents events_{log_};  // faults and log records, shared by the stages
+  PluginGuard guard_;        // around every plugin call
+  SwapStage swap_;           // the active localization; hot swaps
+  CalibrationStage calibration_;
+  ExternalSensorStage sensors_;
+  HardwareReadStage read_;
+  OdometryStage odometry_;
+  CommandStage command_;  // mode and command limiting; the controlled stop
+  WriteStage write_;
+  PublishStage publish_;  // the snapshot and the run samples
 
   // Loop-thread state.
-  StateSnapshot state_{};
-  PluginGuard guard_;
-  HardwareReadStage read_;
-  ActuatorCommand setpoints_{};
-  VelocityCommand command_{};
-  bool has_command_ = false;
-  OdometryStage odometry_;
-  motion::TwistLimiter command_limiter_;            // the robot model's limits
-  motion::TwistLimiter stop_limiter_;               // the same, with the stop deceleration
-  motion::TwistLimiter* limiter_ = &stop_limiter_;  // the one whose state is current
   double last_cycle_s_ = 0.0;
   bool has_last_cycle_ = false;
   bool hardware_paused_ = false;  // the loop's view of hardware_access_
-  bool last_write_zero_ = true;   // the last setpoints written were all zero
-  bool stopping_ = false;         // the controlled stop was taken
-  double stop_catch_up_s_ = 0.0;  // extra time for the stop's first step (limit())
   bool clear_pending_ = false;    // a request_clear() taken this cycle
-  ExternalSensorStage sensors_;   // the external-sensor thread pushes into its rings
 
   // Non-real-time ownership.
   ClockOffset clock_offset_;
