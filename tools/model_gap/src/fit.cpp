@@ -2,6 +2,7 @@
 #include "swivel/model_gap/fit.hpp"
 
 #include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -410,6 +411,17 @@ std::vector<double> dense_jacobian(const ceres::CRSMatrix& jac, std::size_t p) {
   return dense;
 }
 
+// J'J of a Jacobian (`rows` x p, row-major).
+Eigen::MatrixXd information_of(const std::vector<double>& dense, int rows, std::size_t p) {
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
+  for (int r = 0; r < rows; ++r) {
+    const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p, pp);
+    information.noalias() += row * row.transpose();
+  }
+  return information;
+}
+
 // Combinations the run barely informs go back to their anchors (z: the optimum, z units;
 // `dense`: its Jacobian with `rows` rows).
 void anchor_uninformed(const std::vector<double>& dense, int rows,
@@ -417,12 +429,7 @@ void anchor_uninformed(const std::vector<double>& dense, int rows,
                        std::vector<double>& z) {
   const std::size_t p = specs.size();
   const auto pp = static_cast<Eigen::Index>(p);
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(pp, pp);
-  for (int r = 0; r < rows; ++r) {
-    const Eigen::Map<const Eigen::VectorXd> row(dense.data() + static_cast<std::size_t>(r) * p, pp);
-    information.noalias() += row * row.transpose();
-  }
-  const InformationSplit split = split_information(information, scale_free);
+  const InformationSplit split = split_information(information_of(dense, rows, p), scale_free);
   Eigen::VectorXd offset(pp);
   for (std::size_t j = 0; j < p; ++j) {
     const double anchor = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
@@ -437,6 +444,26 @@ void anchor_uninformed(const std::vector<double>& dense, int rows,
                         specs[j].lower / specs[j].scale, specs[j].upper / specs[j].scale);
     }
   }
+}
+
+// A prior that holds the combinations `dense` barely informs at `anchor` (z units), as strongly
+// as the run fixes its best-informed one: A = sqrt(top) N / d, with N the projector onto them
+// (y units).
+ceres::CostFunction* hold_uninformed(const std::vector<double>& dense, int rows,
+                                     const std::vector<ParamSpec>& specs, bool scale_free) {
+  const std::size_t p = specs.size();
+  const Eigen::MatrixXd information = information_of(dense, rows, p);
+  const InformationSplit split = split_information(information, scale_free);
+  const Eigen::MatrixXd scaled = split.d.asDiagonal() * information * split.d.asDiagonal();
+  const double top = std::max(
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues().maxCoeff(), 0.0);
+  Eigen::VectorXd anchor(static_cast<Eigen::Index>(p));
+  for (std::size_t j = 0; j < p; ++j) {
+    const double a = std::isfinite(specs[j].anchor) ? specs[j].anchor : specs[j].initial;
+    anchor(static_cast<Eigen::Index>(j)) = a / specs[j].scale;
+  }
+  const Eigen::MatrixXd a = std::sqrt(top) * split.null_space * split.d.cwiseInverse().asDiagonal();
+  return new ceres::NormalPrior(a, anchor);
 }
 
 // The covariance as if the rows were independent (out.naive_*), model units.
@@ -498,7 +525,7 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
 
   auto* cost = new ReplayCost(problem, specs, options.step);
   ceres::Problem solver_problem;
-  solver_problem.AddResidualBlock(cost, nullptr, z.data());
+  const ceres::ResidualBlockId replay = solver_problem.AddResidualBlock(cost, nullptr, z.data());
   for (std::size_t j = 0; j < p; ++j) {
     const int jj = static_cast<int>(j);
     if (specs[j].lower > -1e299)
@@ -508,20 +535,43 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   }
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options_of(options), &solver_problem, &summary);
+  int iterations = static_cast<int>(summary.iterations.size());
 
-  // Jacobian at the optimum (z units).
+  // Jacobian of the replay at the optimum (z units).
   ceres::CRSMatrix jac;
   ceres::Problem::EvaluateOptions eval;
-  const bool have_jacobian = solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac);
+  eval.residual_blocks = {replay};
+  bool have_jacobian = solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac);
   std::vector<double> dense;
+  const auto theta_of = [&specs, &z, p] {
+    std::vector<double> theta(p);
+    for (std::size_t j = 0; j < p; ++j) theta[j] = z[j] * specs[j].scale;
+    return theta;
+  };
   if (have_jacobian) {
     dense = dense_jacobian(jac, p);
     anchor_uninformed(dense, jac.num_rows, specs, scale_free, z);
+    // Along a combination the run hardly fixes the solver can drift far down a flat valley;
+    // where the model is not linear in it (ParamSpec::hold_when_unfixed), putting that
+    // combination back at its anchors then lands off the valley, worse than the optimum by
+    // more than the noise. Solve again from there with it held at its anchors.
+    const bool may_hold = std::any_of(specs.begin(), specs.end(),
+                                      [](const ParamSpec& s) { return s.hold_when_unfixed; });
+    const FitOutcome anchored = may_hold ? score(problem, theta_of()) : FitOutcome{};
+    if (anchored.ok && anchored.rss > 2.0 * summary.final_cost + 1.0) {
+      solver_problem.AddResidualBlock(hold_uninformed(dense, jac.num_rows, specs, scale_free),
+                                      nullptr, z.data());
+      ceres::Solve(solver_options_of(options), &solver_problem, &summary);
+      iterations += static_cast<int>(summary.iterations.size());
+      have_jacobian = solver_problem.Evaluate(eval, nullptr, nullptr, nullptr, &jac);
+      if (have_jacobian) {
+        dense = dense_jacobian(jac, p);
+        anchor_uninformed(dense, jac.num_rows, specs, scale_free, z);
+      }
+    }
   }
-  std::vector<double> theta(p);
-  for (std::size_t j = 0; j < p; ++j) theta[j] = z[j] * specs[j].scale;
-  FitOutcome out = score(problem, theta);
-  out.iterations = static_cast<int>(summary.iterations.size());
+  FitOutcome out = score(problem, theta_of());
+  out.iterations = iterations;
   if (!out.ok || !have_jacobian) return out;
   robust_covariance(problem, dense, specs, scale_free, out);
   return out;

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <random>
+#include <span>
+#include <vector>
 
 namespace swivel::model_gap {
 namespace {
@@ -45,11 +48,14 @@ FitProblem decay_problem(const Decay& d) {
   return p;
 }
 
-const std::vector<ParamSpec> kSpecs = {{"a", 0.5, 1.0, 0.0, 10.0}, {"b", 0.5, 1.0, 0.0, 10.0}};
+// The decay's parameters a and b, from 0.5 within [0, 10].
+std::vector<ParamSpec> decay_specs() {
+  return {{"a", 0.5, 1.0, 0.0, 10.0}, {"b", 0.5, 1.0, 0.0, 10.0}};
+}
 
 TEST(FitTest, RecoversParametersWithinTheirUncertainty) {
   const Decay d = make_decay(2.0, 1.3, 1);
-  const FitOutcome f = fit(decay_problem(d), kSpecs);
+  const FitOutcome f = fit(decay_problem(d), decay_specs());
   ASSERT_TRUE(f.ok);
   ASSERT_TRUE(f.observable[0] && f.observable[1]);
   EXPECT_NEAR(f.values[0], 2.0, 4.0 * f.sigmas[0]);
@@ -60,7 +66,7 @@ TEST(FitTest, RecoversParametersWithinTheirUncertainty) {
 
 TEST(FitTest, BicPrefersTheTrueModelOverAnExtraParameter) {
   const Decay d = make_decay(2.0, 1.3, 2);
-  const FitOutcome two = fit(decay_problem(d), kSpecs);
+  const FitOutcome two = fit(decay_problem(d), decay_specs());
   // A third parameter that changes nothing only costs ln(n).
   FitProblem p3 = decay_problem(d);
   p3.residuals = [&d](std::span<const double> th, std::vector<double>& r) {
@@ -69,7 +75,7 @@ TEST(FitTest, BicPrefersTheTrueModelOverAnExtraParameter) {
       r[k] = (d.y[k] - th[0] * std::exp(-th[1] * d.t[k])) / d.sigma;
     return th[2] == th[2];
   };
-  std::vector<ParamSpec> specs = kSpecs;
+  std::vector<ParamSpec> specs = decay_specs();
   specs.push_back({"unused", 0.0, 1.0, -1.0, 1.0});
   const FitOutcome three = fit(p3, specs);
   EXPECT_LT(two.bic, three.bic);
@@ -89,7 +95,7 @@ TEST(FitTest, UncertaintiesAreCalibratedForWhiteAndCorrelatedNoise) {
     for (int s = 0; s < draws; ++s) {
       // A slow decay spreads the information over the run, as the effects' regressors do.
       const Decay d = make_decay(2.0, 0.3, 100 + static_cast<unsigned>(s), rho);
-      const FitOutcome f = fit(decay_problem(d), kSpecs);
+      const FitOutcome f = fit(decay_problem(d), decay_specs());
       ASSERT_TRUE(f.ok);
       if (std::abs(f.values[0] - 2.0) <= f.sigmas[0]) ++within;
       mean_sigma += f.sigmas[0] / draws;
@@ -103,6 +109,59 @@ TEST(FitTest, UncertaintiesAreCalibratedForWhiteAndCorrelatedNoise) {
       EXPECT_GT(mean_sigma, 2.0 * white_sigma);  // about sqrt((1 + rho) / (1 - rho)) = 3 times
     }
   }
+}
+
+// Many rows fix a spread Y a^2 + X b^2 (as a run fixes a module layout's), one row whose
+// information is below 10^-6 of theirs pulls a towards 1.3: the solver drifts down the curved
+// valley of equal spread, and putting the combination the run does not fix back at the anchors (1,
+// 1) from there would land off the valley, worse than the anchors themselves. It is held there
+// instead.
+TEST(FitTest, ACombinationNotFixedIsHeldAtItsAnchorsWhereTheModelIsNotLinear) {
+  constexpr double kY = 0.25;
+  constexpr double kX = 0.75;
+  constexpr double kSigma = 1e-4;
+  constexpr std::size_t kRows = 200;
+  const auto spread = [](double a, double b) { return kY * a * a + kX * b * b; };
+  const double truth = spread(1.02, 1.0);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<double> gain;
+  std::vector<double> noise;
+  for (std::size_t k = 0; k < kRows; ++k) {
+    gain.push_back(1.0 + 0.5 * std::sin(0.1 * static_cast<double>(k)));
+    noise.push_back(kSigma * gauss(rng));
+  }
+  FitProblem p;
+  p.row_count = kRows + 1;
+  p.window_count = kRows + 1;
+  for (std::size_t k = 0; k <= kRows; ++k) p.row_window.push_back(k);
+  p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
+    r.resize(kRows + 1);
+    for (std::size_t k = 0; k < kRows; ++k)
+      r[k] = (gain[k] * (spread(th[0], th[1]) - truth) - noise[k]) / kSigma;
+    r[kRows] = 55.0 * (th[0] - 1.3);
+    return true;
+  };
+  std::vector<ParamSpec> specs = {{"a", 1.0, 0.01, 0.5, 1.5}, {"b", 1.0, 0.01, 0.5, 1.5}};
+  for (ParamSpec& s : specs) s.hold_when_unfixed = true;
+  const FitOutcome f = fit(p, specs);
+  ASSERT_TRUE(f.ok);
+  EXPECT_FALSE(f.observable[0] || f.observable[1]);  // each has a part not fixed
+  // On the valley: the rows fit to their noise (about kRows) plus the weak row's pull from
+  // the anchors (about 270); put back from where the solver drifted, the fit would be worse
+  // than 10^5.
+  EXPECT_LT(f.rss, 2.0 * static_cast<double>(kRows) + 300.0);
+  // The spread within 3 sigma (gradient (2 Y a, 2 X b) through the covariance), and within a
+  // hundredth of a per cent.
+  const double ga = 2.0 * kY * f.values[0];
+  const double gb = 2.0 * kX * f.values[1];
+  const std::vector<double>& c = f.covariance;
+  const double sigma = std::sqrt(ga * ga * c[0] + 2.0 * ga * gb * c[1] + gb * gb * c[3]);
+  EXPECT_NEAR(spread(f.values[0], f.values[1]), truth, 3.0 * sigma);
+  EXPECT_NEAR(spread(f.values[0], f.values[1]), truth, 1e-4);
+  // What stays unfixed is near the anchors, not where the weak row pulled.
+  EXPECT_LT(std::abs(f.values[0] - 1.0), 0.05);
+  EXPECT_LT(std::abs(f.values[1] - 1.0), 0.05);
 }
 
 TEST(FitTest, ChiSquareAsANormalDeviate) {

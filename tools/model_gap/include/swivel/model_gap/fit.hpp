@@ -35,6 +35,13 @@ struct ParamSpec {
   /// parameter in a fit, the combinations the run does not fix are judged scale-free (on the
   /// information scaled to a unit diagonal), so that its units cannot hide an effect.
   bool scale_free = false;
+  /// The residuals are not linear in this parameter along combinations the run may not fix
+  /// (a module layout's turn rate goes with the square of its scales): the solver can drift
+  /// far down such a combination's flat valley, and putting it back at the anchors from there
+  /// lands off the valley. When that costs more than the noise (the whitened residual sum of
+  /// squares rises by more than 1), the fit is solved again from there with the combinations
+  /// not fixed held at the anchors.
+  bool hold_when_unfixed = false;
 };
 
 /// Whitened residual rows for parameter values `theta` (same order as the specs); NaN for a
