@@ -112,6 +112,14 @@ bool collect_changes(const std::string& name, const EffectParams& params, RobotM
             kMaxSteeringOffsetRad);
       }
     }
+  } else if (swpc && name == "module_layout") {
+    // The positions of every steering axis, scaled about the robot frame's origin.
+    for (std::size_t i = 0; i < out.modules.size(); ++i) {
+      SwpcModuleParams& m = out.modules[i];
+      const std::string where = "swpc.modules[" + std::to_string(i) + "].";
+      scale("longitudinal_scale", where + "x_m", m.x_m);
+      scale("lateral_scale", where + "y_m", m.y_m);
+    }
   } else {
     return false;
   }

@@ -2,9 +2,11 @@
 #include "swivel/model_gap/library.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string_view>
 
 #include "swivel/sim/effects.hpp"
 
@@ -29,19 +31,19 @@ double typical_magnitude(const std::string& effect) {
   if (effect == "actuator_lag" || effect == "steering_lag") return 0.05;  // s
   if (effect == "sensor_latency") return 0.02;                            // s
   if (effect == "caster_offset") return 0.1;                              // factor
-  return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width, track_scrub
+  return 0.01;  // scale factors: gyro_scale, wheel_radius, track_width, track_scrub,
+                // module_layout
 }
 
-const char* const kSensorEffects[] = {"gyro_bias",       "gyro_scale",     "wheel_radius",
-                                      "track_width",     "track_scrub",    "caster_offset",
-                                      "steering_offset", "sensor_latency", "slip"};
-const char* const kCommandEffects[] = {"actuator_lag", "steering_lag"};
+constexpr std::array<std::string_view, 10> kSensorEffects = {
+    "gyro_bias",     "gyro_scale",    "wheel_radius",    "track_width",    "track_scrub",
+    "caster_offset", "module_layout", "steering_offset", "sensor_latency", "slip"};
+constexpr std::array<std::string_view, 2> kCommandEffects = {"actuator_lag", "steering_lag"};
 
 bool in_question(const std::string& effect, Question q) {
-  const auto is = [&effect](const char* e) { return effect == e; };
   if (q == Question::kSensorToPose)
-    return std::any_of(std::begin(kSensorEffects), std::end(kSensorEffects), is);
-  return std::any_of(std::begin(kCommandEffects), std::end(kCommandEffects), is);
+    return std::ranges::find(kSensorEffects, effect) != kSensorEffects.end();
+  return std::ranges::find(kCommandEffects, effect) != kCommandEffects.end();
 }
 
 std::optional<double>* limit_field(MotionLimits& limits, const std::string& key) {
@@ -105,18 +107,18 @@ void Candidate::apply(RobotModel& model, std::span<const double> theta) const {
 }
 
 double Candidate::value(std::size_t i, double fit) const {
-  if (!inverse[i]) return fit;
+  if (inverse[i] == 0) return fit;
   return fit > 1e-12 ? 1.0 / fit : std::numeric_limits<double>::infinity();
 }
 
 double Candidate::fit_resolution(std::size_t i, double fit) const {
   // A relative resolution of the limit is the same relative resolution of 1 / limit.
-  return inverse[i] ? kLimitResolution * std::abs(fit)
-                    : std::hypot(resolution[i], relative_resolution[i] * std::abs(fit));
+  return inverse[i] != 0 ? kLimitResolution * std::abs(fit)
+                         : std::hypot(resolution[i], relative_resolution[i] * std::abs(fit));
 }
 
 double Candidate::sigma(std::size_t i, double fit, double fit_sigma) const {
-  if (!inverse[i]) return std::hypot(fit_sigma, fit_resolution(i, fit));
+  if (inverse[i] == 0) return std::hypot(fit_sigma, fit_resolution(i, fit));
   if (!(fit > 1e-12)) return std::numeric_limits<double>::infinity();
   const double limit = 1.0 / fit;
   return std::hypot(fit_sigma / (fit * fit), kLimitResolution * limit);
@@ -137,7 +139,7 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
       s.scale = typical_magnitude(e.name);
       // An effect the nominal model already carries is refitted from its own value.
       double identity = p.identity;
-      if (have != nominal.effects.end() && have->second.count(p.key) != 0U) {
+      if (have != nominal.effects.end() && have->second.contains(p.key)) {
         identity = have->second.at(p.key);
       }
       s.initial = identity;
@@ -148,6 +150,10 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
       s.lower = p.min;
       s.upper = p.max;
       if (e.name == "sensor_latency") s.upper = std::min(s.upper, 0.25);
+      // A layout changes the turn rate through the spread of the module positions, quadratic
+      // in its two scales, and a robot whose modules are centred on its reference point fixes
+      // only that spread (GAP.md, "Combinations the run cannot fix").
+      s.hold_when_unfixed = e.name == "module_layout";
       c.keys.push_back(p.key);
       c.params.push_back(s);
       c.identity.push_back(identity);

@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <span>
 #include <string>
-#include <vector>
+#include <string_view>
 
 #include "gap_fixtures.hpp"
 #include "swivel/robot_model_io.hpp"
@@ -66,16 +69,14 @@ RobotModel calibrated(const std::string& name) {
   return m;
 }
 
-const std::vector<std::string> kFoldable = {"gyro_bias",   "gyro_scale",    "wheel_radius",
-                                            "track_width", "caster_offset", "steering_offset"};
-const std::vector<std::string> kKept = {"slip", "actuator_lag", "steering_lag", "sensor_latency",
-                                        "track_scrub"};
+constexpr std::array<std::string_view, 7> kFoldable = {
+    "gyro_bias",     "gyro_scale",      "wheel_radius", "track_width",
+    "caster_offset", "steering_offset", "module_layout"};
+constexpr std::array<std::string_view, 5> kKept = {"slip", "actuator_lag", "steering_lag",
+                                                   "sensor_latency", "track_scrub"};
 
-bool contains(const std::vector<std::string>& names, const std::string& name) {
-  for (const std::string& n : names) {
-    if (n == name) return true;
-  }
-  return false;
+bool contains(std::span<const std::string_view> names, std::string_view name) {
+  return std::ranges::find(names, name) != names.end();
 }
 
 class FoldEffects : public ::testing::TestWithParam<const char*> {};
@@ -91,7 +92,10 @@ TEST_P(FoldEffects, EachEffectFoldsIntoTheParameterTheWorldChangesAndNothingElse
     if (contains(kFoldable, effect.name)) {
       EXPECT_TRUE(f.model.effects.empty()) << effect.name;
       EXPECT_TRUE(f.kept.empty()) << effect.name;
-      EXPECT_EQ(f.folded.size(), effect.params.size()) << effect.name;
+      // One line per parameter changed: module_layout moves both coordinates of every module.
+      const std::size_t lines =
+          effect.name == "module_layout" ? 2 * base.modules.size() : effect.params.size();
+      EXPECT_EQ(f.folded.size(), lines) << effect.name;
       // The model really changed: without the effect its world is another one.
       const sim::PlantParams nominal = sim::resolve_plant(base);
       const sim::PlantParams folded = sim::resolve_plant(f.model);
@@ -102,7 +106,9 @@ TEST_P(FoldEffects, EachEffectFoldsIntoTheParameterTheWorldChangesAndNothingElse
                   nominal.differential.track_width_m != folded.differential.track_width_m ||
                   nominal.modules[1].wheel_radius_m != folded.modules[1].wheel_radius_m ||
                   nominal.modules[1].caster_offset_m != folded.modules[1].caster_offset_m ||
-                  nominal.modules[1].steering_offset_rad != folded.modules[1].steering_offset_rad)
+                  nominal.modules[1].steering_offset_rad != folded.modules[1].steering_offset_rad ||
+                  nominal.modules[1].x_m != folded.modules[1].x_m ||
+                  nominal.modules[1].y_m != folded.modules[1].y_m)
           << effect.name;
     } else {
       ASSERT_TRUE(contains(kKept, effect.name)) << effect.name << ": neither folded nor kept";
@@ -145,6 +151,34 @@ TEST(FoldEffectsLine, SaysWhatWentWhere) {
   EXPECT_EQ(f.kept[0].rfind("sensor_latency: the robot model has no latency parameter", 0), 0U)
       << f.kept[0];
   EXPECT_EQ(f.model.sensors.gyro.bias_rad_s, 0.004);
+}
+
+// The daemon's swpc drivetrain reads the module positions from `swpc.modules`: a layout
+// effect moves every steering axis there, x by the longitudinal and y by the lateral scale.
+TEST(FoldEffectsLine, AModuleLayoutMovesEveryModuleInTheModelFile) {
+  RobotModel m = testing::robot("swpc4");
+  m.effects["module_layout"]["lateral_scale"] = 1.02;
+  m.effects["module_layout"]["longitudinal_scale"] = 0.99;
+  const FoldResult f = fold_effects(m);
+  EXPECT_TRUE(f.kept.empty());
+  EXPECT_TRUE(f.model.effects.empty());
+  ASSERT_EQ(f.folded.size(), 8U);
+  EXPECT_EQ(
+      f.folded[0].rfind(
+          "module_layout.longitudinal_scale = 0.99 -> swpc.modules[0].x_m 0.215 -> 0.2128", 0),
+      0U)
+      << f.folded[0];
+  EXPECT_EQ(f.folded[7].rfind(
+                "module_layout.lateral_scale = 1.02 -> swpc.modules[3].y_m 0.125 -> 0.1275", 0),
+            0U)
+      << f.folded[7];
+  const RobotModel loaded = parse_robot_model(robot_model_to_yaml(f.model), "folded.yaml");
+  ASSERT_EQ(loaded.modules.size(), m.modules.size());
+  for (std::size_t i = 0; i < m.modules.size(); ++i) {
+    EXPECT_DOUBLE_EQ(loaded.modules[i].x_m, m.modules[i].x_m * 0.99) << "module " << i;
+    EXPECT_DOUBLE_EQ(loaded.modules[i].y_m, m.modules[i].y_m * 1.02) << "module " << i;
+  }
+  expect_same_plant(sim::resolve_plant(loaded), sim::resolve_plant(m), "from the file");
 }
 
 TEST(FoldEffectsLine, AValueTheModelFileCannotHoldStaysAnEffect) {

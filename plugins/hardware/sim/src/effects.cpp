@@ -24,9 +24,11 @@ std::string format_number(double v) {
   return s.str();
 }
 
-double param_or(const EffectParams& params, const std::string& key, double identity) {
-  const auto it = params.find(key);
-  return it == params.end() ? identity : it->second;
+// A parameter of an effect the model may not carry (nullptr).
+double param_or(const EffectParams* params, const std::string& key, double identity) {
+  if (params == nullptr) return identity;
+  const auto it = params->find(key);
+  return it == params->end() ? identity : it->second;
 }
 
 std::string names_of(const std::vector<EffectInfo>& library) {
@@ -93,6 +95,11 @@ std::vector<EffectInfo> effect_library(const RobotModel& model) {
     }
     lib.push_back(caster);
     lib.push_back(steer);
+    lib.push_back({"module_layout",
+                   "true module positions: each steering axis's y = model y * lateral_scale, x = "
+                   "model x * longitudinal_scale (about the robot frame's origin)",
+                   {{"lateral_scale", 1.0, 0.5, 1.5, "factor on every module's y"},
+                    {"longitudinal_scale", 1.0, 0.5, 1.5, "factor on every module's x"}}});
   }
 
   lib.push_back({"slip",
@@ -142,14 +149,20 @@ void validate_effects(const RobotModel& model) {
       for (const EffectParamInfo& p : effect->params) {
         if (p.key == key) info = &p;
       }
+      std::string message = "effects.";
+      message.append(name).append(".").append(key).append(": ");
       if (info == nullptr) {
-        throw std::invalid_argument("effects." + name + "." + key +
-                                    ": unknown parameter (expected: " + keys_of(*effect) + ")");
+        message.append("unknown parameter (expected: ").append(keys_of(*effect)).append(")");
+        throw std::invalid_argument(message);
       }
       if (!std::isfinite(value) || value < info->min || value > info->max) {
-        throw std::invalid_argument("effects." + name + "." + key + ": " + format_number(value) +
-                                    " is outside [" + format_number(info->min) + ", " +
-                                    format_number(info->max) + "]");
+        message.append(format_number(value))
+            .append(" is outside [")
+            .append(format_number(info->min))
+            .append(", ")
+            .append(format_number(info->max))
+            .append("]");
+        throw std::invalid_argument(message);
       }
     }
   }
@@ -199,54 +212,47 @@ PlantParams resolve_plant(const RobotModel& model) {
     const auto it = model.effects.find(name);
     return it == model.effects.end() ? nullptr : &it->second;
   };
-  static const EffectParams kNone;
-  const EffectParams& bias = effect("gyro_bias") ? *effect("gyro_bias") : kNone;
-  const EffectParams& scale = effect("gyro_scale") ? *effect("gyro_scale") : kNone;
-  const EffectParams& radius = effect("wheel_radius") ? *effect("wheel_radius") : kNone;
-  p.sensors.gyro.bias_rad_s += param_or(bias, "bias_rad_s", 0.0);
-  p.sensors.gyro.scale *= param_or(scale, "scale", 1.0);
+  const EffectParams* radius = effect("wheel_radius");
+  p.sensors.gyro.bias_rad_s += param_or(effect("gyro_bias"), "bias_rad_s", 0.0);
+  p.sensors.gyro.scale *= param_or(effect("gyro_scale"), "scale", 1.0);
 
   if (model.drivetrain == DrivetrainKind::kDifferential) {
-    const EffectParams& track = effect("track_width") ? *effect("track_width") : kNone;
     p.module_count = 2;
     p.differential = model.differential;
     p.differential.wheel_radius_left_m *= param_or(radius, "left_scale", 1.0);
     p.differential.wheel_radius_right_m *= param_or(radius, "right_scale", 1.0);
-    p.differential.track_width_m *= param_or(track, "scale", 1.0);
-    if (const EffectParams* scrub = effect("track_scrub")) {
-      p.track_spin_scale = param_or(*scrub, "spin_scale", 1.0);
-    }
+    p.differential.track_width_m *= param_or(effect("track_width"), "scale", 1.0);
+    p.track_spin_scale = param_or(effect("track_scrub"), "spin_scale", 1.0);
   } else {
     if (model.modules.size() < 2 || model.modules.size() > kMaxModules) {
       throw std::invalid_argument("swpc model '" + model.name + "' has " +
                                   std::to_string(model.modules.size()) + " modules; expected 2.." +
                                   std::to_string(kMaxModules));
     }
-    const EffectParams& caster = effect("caster_offset") ? *effect("caster_offset") : kNone;
-    const EffectParams& steer = effect("steering_offset") ? *effect("steering_offset") : kNone;
+    const EffectParams* caster = effect("caster_offset");
+    const EffectParams* steer = effect("steering_offset");
+    const EffectParams* layout = effect("module_layout");
+    const double lateral = param_or(layout, "lateral_scale", 1.0);
+    const double longitudinal = param_or(layout, "longitudinal_scale", 1.0);
     p.module_count = model.modules.size();
     for (std::size_t i = 0; i < p.module_count; ++i) {
       SwpcModuleParams m = model.modules[i];
       m.wheel_radius_m *= param_or(radius, module_key(i, "scale"), 1.0);
       m.caster_offset_m *= param_or(caster, module_key(i, "scale"), 1.0);
       m.steering_offset_rad += param_or(steer, module_key(i, "rad"), 0.0);
+      m.x_m *= longitudinal;
+      m.y_m *= lateral;
       p.modules[i] = m;
     }
   }
-  if (const EffectParams* slip = effect("slip")) {
-    p.slip_gain_per_radps2 = param_or(*slip, "gain_per_radps2", 0.0);
-  }
-  if (const EffectParams* lag = effect("actuator_lag")) {
-    p.actuator_time_constant_s = param_or(*lag, "time_constant_s", 0.0);
-  }
-  p.steering_time_constant_s = p.actuator_time_constant_s;
-  if (const EffectParams* lag = effect("steering_lag")) {
-    p.steering_time_constant_s = param_or(*lag, "time_constant_s", 0.0);
-  }
+  p.slip_gain_per_radps2 = param_or(effect("slip"), "gain_per_radps2", 0.0);
+  p.actuator_time_constant_s = param_or(effect("actuator_lag"), "time_constant_s", 0.0);
+  const EffectParams* steering_lag = effect("steering_lag");
+  p.steering_time_constant_s = steering_lag == nullptr
+                                   ? p.actuator_time_constant_s
+                                   : param_or(steering_lag, "time_constant_s", 0.0);
   p.limits = model.limits;
-  if (const EffectParams* latency = effect("sensor_latency")) {
-    p.sensor_delay_s = param_or(*latency, "delay_s", 0.0);
-  }
+  p.sensor_delay_s = param_or(effect("sensor_latency"), "delay_s", 0.0);
   return p;
 }
 

@@ -10,6 +10,7 @@
 
 #include "swivel/sim/open_loop.hpp"
 #include "swivel/sim/world.hpp"
+#include "swivel/swpc/swpc_kinematics.hpp"
 #include "test_support.hpp"
 
 namespace swivel::sim {
@@ -70,6 +71,8 @@ TEST(EffectLibrary, IdentityValuesChangeNothing) {
     EXPECT_EQ(with.modules[i].wheel_radius_m, without.modules[i].wheel_radius_m);
     EXPECT_EQ(with.modules[i].caster_offset_m, without.modules[i].caster_offset_m);
     EXPECT_EQ(with.modules[i].steering_offset_rad, without.modules[i].steering_offset_rad);
+    EXPECT_EQ(with.modules[i].x_m, without.modules[i].x_m);
+    EXPECT_EQ(with.modules[i].y_m, without.modules[i].y_m);
   }
   EXPECT_EQ(with.sensors.gyro.bias_rad_s, 0.0);
   EXPECT_EQ(with.sensor_delay_s, 0.0);
@@ -80,8 +83,8 @@ TEST(EffectLibrary, ErrorsNameEffectAndParameter) {
   swpc.effects["track_width"]["scale"] = 1.01;
   EXPECT_EQ(message_of([&] { validate_effects(swpc); }),
             "effects.track_width: not available for a swpc robot (available: gyro_bias, "
-            "gyro_scale, wheel_radius, caster_offset, steering_offset, slip, actuator_lag, "
-            "steering_lag, sensor_latency)");
+            "gyro_scale, wheel_radius, caster_offset, steering_offset, module_layout, slip, "
+            "actuator_lag, steering_lag, sensor_latency)");
   RobotModel model = docent();
   model.effects["gyro_bias"]["bias"] = 0.1;
   EXPECT_EQ(message_of([&] { validate_effects(model); }),
@@ -207,6 +210,52 @@ TEST(Effects, LargerCasterOffsetSettlesAFreeCasterFurtherIn) {
   const double base = settled(swpc4());
   const double larger = settled(model);
   EXPECT_LT(larger, base - 0.005);
+}
+
+TEST(Effects, ModuleLayoutScalesEveryModulePositionAboutTheOrigin) {
+  RobotModel model = swpc4();
+  model.effects["module_layout"]["lateral_scale"] = 1.02;
+  model.effects["module_layout"]["longitudinal_scale"] = 0.99;
+  const PlantParams wider = resolve_plant(model);
+  const PlantParams nominal = resolve_plant(swpc4());
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(wider.modules[i].x_m, nominal.modules[i].x_m * 0.99) << "module " << i;
+    EXPECT_EQ(wider.modules[i].y_m, nominal.modules[i].y_m * 1.02) << "module " << i;
+    EXPECT_EQ(wider.modules[i].caster_offset_m, nominal.modules[i].caster_offset_m);
+    EXPECT_EQ(wider.modules[i].wheel_radius_m, nominal.modules[i].wheel_radius_m);
+  }
+  EXPECT_THROW(set_effect(model, "module_layout.lateral_scale=2"), std::invalid_argument);
+  RobotModel diff = docent();
+  EXPECT_THROW(set_effect(diff, "module_layout.lateral_scale=1.02"), std::invalid_argument);
+}
+
+TEST(Effects, WiderModuleLayoutTurnsSlowerOnTheNominalWheelRates) {
+  // A turn on the spot commanded with the nominal geometry: modules further from the centre
+  // need more wheel travel per radian, so the robot turns less.
+  const Twist2 spin{0.0, 0.0, 0.5};
+  const auto turned = [&spin](const RobotModel& truth) {
+    const OpenLoopController controller(swpc4());
+    SimOptions options = quiet();
+    for (std::size_t i = 0; i < 4; ++i) {
+      EXPECT_TRUE(
+          swpc::self_aligned_steer_angle(swpc4().modules[i], spin, options.initial_steer_rad[i]));
+    }
+    World world(truth, options);
+    HardwareState hw;
+    ActuatorCommand command;
+    for (int k = 0; k < 200; ++k) {
+      world.read(hw);
+      controller.velocity(spin, hw, command);
+      world.step(0.01, command);
+    }
+    return world.true_pose().yaw_rad;
+  };
+  RobotModel model = swpc4();
+  model.effects["module_layout"]["lateral_scale"] = 1.2;
+  const double base = turned(swpc4());
+  const double wider = turned(model);
+  EXPECT_NEAR(base, 1.0, 0.01);
+  EXPECT_LT(wider, base * 0.97);
 }
 
 TEST(Effects, SlipLosesGroundWhileAccelerating) {

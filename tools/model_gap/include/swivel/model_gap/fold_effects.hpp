@@ -15,6 +15,8 @@
 //   caster_offset    swpc: modules[i].caster_offset_m *= module_<i+1>_scale
 //   steering_offset  swpc: modules[i].steering_offset_rad += module_<i+1>_rad (true steering
 //                    = measured + offset, in the model as in the world)
+//   module_layout    swpc: modules[i].x_m *= longitudinal_scale, modules[i].y_m *=
+//                    lateral_scale (every module; one folded line per position changed)
 //
 // so that resolve_plant() of the folded model equals resolve_plant() of the model with the
 // effects. The rest stays in `effects:`, for the simulator, each with the reason the daemon

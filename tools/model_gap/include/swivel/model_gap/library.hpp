@@ -6,7 +6,7 @@
 // robot's own limits are the model's `limits:` section. This file adds only how to fit them.
 //
 //   sensor to pose     gyro_bias, gyro_scale, wheel_radius, track_width | caster_offset,
-//                      steering_offset, sensor_latency, slip
+//                      module_layout, steering_offset, sensor_latency, slip
 //   command to motion  actuator_lag, steering_lag, accel_limit (limits.linear_acceleration_mps2,
 //                      .angular_acceleration_radps2), steering_rate_limit
 //                      (limits.steering_rate_radps)

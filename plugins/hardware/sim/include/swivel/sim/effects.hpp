@@ -19,6 +19,11 @@
 //   caster_offset   module_<i>_scale (1)   swpc       true caster offset *= scale
 //   steering_offset module_<i>_rad (0)     swpc       true steering offset += rad, so the
 //                                                     encoder reads true - offset
+//   module_layout   lateral_scale,         swpc       true module positions: every steering
+//                   longitudinal_scale (1)            axis's y *= lateral_scale and x *=
+//                                                     longitudinal_scale, about the robot
+//                                                     frame's origin (modules sit wider
+//                                                     apart or further fore and aft)
 //   slip            gain_per_radps2 (0)               longitudinal slip: the contact point
 //                                                     rolls r (psi_dot - g |psi_dot| psi_ddot)
 //                                                     (less than the wheel turns while it
