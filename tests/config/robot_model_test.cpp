@@ -10,7 +10,7 @@
 namespace swivel {
 namespace {
 
-const std::string kDocent = R"(name: docent
+const std::string docent_yaml = R"(name: docent
 drivetrain: differential
 differential:
   wheel_radius_left_m: 0.075
@@ -23,7 +23,7 @@ sensors:
 effects: {}
 )";
 
-const std::string kSwpc = R"(name: "cart 7"
+const std::string swpc_yaml = R"(name: "cart 7"
 drivetrain: swpc
 swpc:
   modules:
@@ -80,7 +80,7 @@ void expect_same(const RobotModel& a, const RobotModel& b) {
 }
 
 TEST(RobotModel, ParsesDifferentialModel) {
-  const RobotModel m = parse_robot_model(kDocent, "docent.yaml");
+  const RobotModel m = parse_robot_model(docent_yaml, "docent.yaml");
   EXPECT_EQ(m.name, "docent");
   EXPECT_EQ(m.drivetrain, DrivetrainKind::kDifferential);
   EXPECT_EQ(m.differential.wheel_radius_right_m, 0.0752);
@@ -92,7 +92,7 @@ TEST(RobotModel, ParsesDifferentialModel) {
 }
 
 TEST(RobotModel, ParsesSwpcModelWithEffects) {
-  const RobotModel m = parse_robot_model(kSwpc, "cart.yaml");
+  const RobotModel m = parse_robot_model(swpc_yaml, "cart.yaml");
   EXPECT_EQ(m.name, "cart 7");
   ASSERT_EQ(m.module_count(), 2U);
   EXPECT_EQ(m.modules[1].x_m, -0.215);
@@ -104,7 +104,7 @@ TEST(RobotModel, ParsesSwpcModelWithEffects) {
 }
 
 TEST(RobotModel, SaveThenLoadGivesTheSameModel) {
-  for (const std::string& text : {kDocent, kSwpc}) {
+  for (const std::string& text : {docent_yaml, swpc_yaml}) {
     const RobotModel original = parse_robot_model(text, "in.yaml");
     const std::string path = testing::TempDir() + "/saved_model.yaml";
     save_robot_model(original, path);
@@ -114,7 +114,7 @@ TEST(RobotModel, SaveThenLoadGivesTheSameModel) {
 }
 
 TEST(RobotModel, WritesShortestExactNumbers) {
-  const std::string yaml = robot_model_to_yaml(parse_robot_model(kDocent, "in.yaml"));
+  const std::string yaml = robot_model_to_yaml(parse_robot_model(docent_yaml, "in.yaml"));
   EXPECT_NE(yaml.find("  wheel_radius_left_m: 0.075\n"), std::string::npos) << yaml;
   EXPECT_NE(yaml.find("effects: {}\n"), std::string::npos) << yaml;
 }
@@ -129,7 +129,7 @@ TEST(RobotModel, RepositoryDocentModelLoads) {
 }
 
 TEST(RobotModel, RejectsUnknownKeyWithKnownKeys) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.insert(text.find("  track_width_m"), "  tire_pressure_bar: 2\n");
   EXPECT_EQ(error_of(text),
             "robot.yaml:6:3: differential.tire_pressure_bar: unknown key (known: "
@@ -137,7 +137,7 @@ TEST(RobotModel, RejectsUnknownKeyWithKnownKeys) {
 }
 
 TEST(RobotModel, MisspeltRequiredKeyIsPointedAt) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.replace(text.find("  track_width_m"), 15, "  track_widht_m");
   EXPECT_EQ(error_of(text),
             "robot.yaml:4:3: differential: missing required key 'track_width_m' (expected a "
@@ -145,7 +145,7 @@ TEST(RobotModel, MisspeltRequiredKeyIsPointedAt) {
 }
 
 TEST(RobotModel, RejectsMissingRequiredKey) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.erase(text.find("  wheel_radius_left_m: 0.075\n"), 29);
   EXPECT_EQ(error_of(text),
             "robot.yaml:4:3: differential: missing required key 'wheel_radius_left_m' "
@@ -153,14 +153,14 @@ TEST(RobotModel, RejectsMissingRequiredKey) {
 }
 
 TEST(RobotModel, RejectsNonPositiveGeometry) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.replace(text.find("0.40"), 4, "-0.4");
   EXPECT_EQ(error_of(text),
             "robot.yaml:6:3: differential.track_width_m: expected a positive number, got -0.4");
 }
 
 TEST(RobotModel, CountsPerRevolutionAreRealValued) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.replace(text.find("4096"), 4, "2796.8");  // a 43.7:1 gear on a 64-count encoder
   const RobotModel m = parse_robot_model(text, "robot.yaml");
   EXPECT_EQ(m.sensors.wheel_encoder_counts_per_rev, 2796.8);
@@ -169,7 +169,7 @@ TEST(RobotModel, CountsPerRevolutionAreRealValued) {
 
 TEST(RobotModel, RejectsCountsPerRevolutionThatAreNotPositiveAndFinite) {
   for (const char* bad : {"0", "-64", ".nan", ".inf", "many"}) {
-    std::string text = kDocent;
+    std::string text = docent_yaml;
     text.replace(text.find("4096"), 4, bad);
     EXPECT_NE(
         error_of(text).find("robot.yaml:8:3: sensors.wheel_encoder_counts_per_rev: expected "),
@@ -179,7 +179,7 @@ TEST(RobotModel, RejectsCountsPerRevolutionThatAreNotPositiveAndFinite) {
 }
 
 TEST(RobotModel, RejectsSectionThatDoesNotMatchDrivetrain) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.replace(text.find("drivetrain: differential"), 24, "drivetrain: swpc");
   EXPECT_EQ(error_of(text),
             "robot.yaml:3:1: differential: section does not match drivetrain 'swpc' "
@@ -187,14 +187,14 @@ TEST(RobotModel, RejectsSectionThatDoesNotMatchDrivetrain) {
 }
 
 TEST(RobotModel, RejectsUnknownDrivetrain) {
-  std::string text = kDocent;
+  std::string text = docent_yaml;
   text.replace(text.find("drivetrain: differential"), 24, "drivetrain: tank");
   EXPECT_EQ(error_of(text),
             "robot.yaml:2:1: drivetrain: expected one of differential, swpc, got 'tank'");
 }
 
 TEST(RobotModel, RejectsSwpcWithOneModule) {
-  std::string text = kSwpc;
+  std::string text = swpc_yaml;
   text.erase(text.find("    - {x_m: -0.215"),
              text.find("sensors:") - text.find("    - {x_m: -0.215"));
   EXPECT_EQ(error_of(text),
@@ -202,7 +202,7 @@ TEST(RobotModel, RejectsSwpcWithOneModule) {
 }
 
 TEST(RobotModel, RejectsUnknownKeyInModule) {
-  std::string text = kSwpc;
+  std::string text = swpc_yaml;
   text.replace(text.find("wheel_radius_m: 0.0551"), 14, "wheel_diameter_m");
   EXPECT_EQ(error_of(text),
             "robot.yaml:6:7: swpc.modules[1]: missing required key 'wheel_radius_m' (expected a "
@@ -214,13 +214,13 @@ TEST(RobotModel, RejectsUnknownKeyInModule) {
 }
 
 TEST(RobotModel, RejectsNonNumericEffectParameter) {
-  std::string text = kSwpc;
+  std::string text = swpc_yaml;
   text.replace(text.find("0.006}"), 5, "large");
   EXPECT_EQ(error_of(text),
             "robot.yaml:11:15: effects.gyro_bias.bias_rad_s: expected a number, got 'large'");
 }
 
-const std::string kSwpcLimits = R"(limits:
+const std::string swpc_limits_yaml = R"(limits:
   linear_acceleration_mps2: 0.6
   angular_acceleration_radps2: 2.0
   steering_rate_radps: 6.0
@@ -228,11 +228,11 @@ const std::string kSwpcLimits = R"(limits:
 )";
 
 TEST(RobotModel, LimitsAreOptionalAndRoundTrip) {
-  const RobotModel without = parse_robot_model(kSwpc, "cart.yaml");
+  const RobotModel without = parse_robot_model(swpc_yaml, "cart.yaml");
   EXPECT_FALSE(without.limits.any());
   EXPECT_EQ(robot_model_to_yaml(without).find("limits:"), std::string::npos);
 
-  const RobotModel m = parse_robot_model(kSwpc + kSwpcLimits, "cart.yaml");
+  const RobotModel m = parse_robot_model(swpc_yaml + swpc_limits_yaml, "cart.yaml");
   EXPECT_EQ(m.limits.linear_acceleration_mps2, 0.6);
   EXPECT_EQ(m.limits.angular_acceleration_radps2, 2.0);
   EXPECT_EQ(m.limits.steering_rate_radps, 6.0);
@@ -243,15 +243,15 @@ TEST(RobotModel, LimitsAreOptionalAndRoundTrip) {
 }
 
 TEST(RobotModel, RejectsBadLimits) {
-  std::string text = kSwpc + kSwpcLimits;
+  std::string text = swpc_yaml + swpc_limits_yaml;
   text.replace(text.find("0.6"), 3, "0");
   EXPECT_EQ(error_of(text),
             "robot.yaml:14:3: limits.linear_acceleration_mps2: expected a positive number, got 0");
-  EXPECT_EQ(error_of(kSwpc + "limits: {max_speed: 1}\n"),
+  EXPECT_EQ(error_of(swpc_yaml + "limits: {max_speed: 1}\n"),
             "robot.yaml:13:10: limits.max_speed: unknown key (known: linear_velocity_mps, "
             "angular_velocity_radps, linear_acceleration_mps2, angular_acceleration_radps2, "
             "linear_jerk_mps3, angular_jerk_radps3, steering_rate_radps)");
-  EXPECT_EQ(error_of(kDocent + "limits: {steering_rate_radps: 6}\n"),
+  EXPECT_EQ(error_of(docent_yaml + "limits: {steering_rate_radps: 6}\n"),
             "robot.yaml:12:10: limits.steering_rate_radps: applies to swpc robots only (this one "
             "is differential)");
 }

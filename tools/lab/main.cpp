@@ -14,7 +14,8 @@ namespace swivel::lab {
 }  // namespace swivel::lab
 #undef SWIVEL_LAB_COMMAND
 
-int main(int argc, char** argv) {
+// The tool behind main(), which reports what escapes its set-up.
+static int lab_main(int argc, char** argv) {
   CLI::App app{"swivel-lab: offline simulation, calibration and model analysis for Swivel robots"};
   app.require_subcommand(1);
   int exit_code = 0;
@@ -31,4 +32,15 @@ int main(int argc, char** argv) {
     return 1;
   }
   return exit_code;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return lab_main(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "swivel-lab: error: " << e.what() << '\n';
+  } catch (...) {
+    std::cerr << "swivel-lab: error: an exception that is not a std::exception\n";
+  }
+  return 1;
 }

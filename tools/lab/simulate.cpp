@@ -118,8 +118,8 @@ int run_simulate(const SimulateOptions& o) {
   // The world's gyro reports the mean rate since its previous read, and it is read once a row.
   header.gyro_mean_over_row = true;
   // The world's truth is stamped on the simulation's own clock.
-  header.comments.push_back("truth_clock: shared");
-  header.comments.push_back("truth_frame: robot");
+  header.comments.emplace_back("truth_clock: shared");
+  header.comments.emplace_back("truth_frame: robot");
   header.comments.push_back("source: swivel-lab simulate, trajectory " + o.trajectory + ", rate " +
                             format(o.rate_hz) + " Hz, seed " + std::to_string(o.seed) + ", noise " +
                             o.noise);

@@ -44,9 +44,9 @@ class Trajectory {
 
  private:
   struct Segment {
-    double duration_s;
+    double duration_s = 0.0;
     Twist2 twist;
-    bool ramp;  // ramp up and down inside the segment (stops between segments)
+    bool ramp = false;  // ramp up and down inside the segment (stops between segments)
   };
   [[nodiscard]] double envelope(double t_s) const;
   [[nodiscard]] double envelope_integral(double t_s) const;

@@ -44,6 +44,7 @@ class LabCalibrateTest : public ::testing::Test {
     const std::string out = (dir_ / "stdout.txt").string();
     const std::string err = (dir_ / "stderr.txt").string();
     const std::string cmd = std::string(SWIVEL_LAB_EXE) + " " + args + " >" + out + " 2>" + err;
+    // The shell redirects the tool's output. NOLINTNEXTLINE(cert-env33-c)
     const int status = std::system(cmd.c_str());
     out_ = slurp(out);
     err_ = slurp(err);
@@ -58,7 +59,7 @@ class LabCalibrateTest : public ::testing::Test {
   // One calibration log: module `m` (1-based) locked at `deg`, 90 deg at 0.3 rad/s unless
   // `extra` gives another --duration.
   std::string simulate(const std::string& model, int m, double deg, const std::string& extra) {
-    const std::string file =
+    std::string file =
         (dir_ / ("cal_" + std::to_string(m) + "_" + std::to_string(static_cast<int>(deg)) + ".csv"))
             .string();
     const int status =

@@ -75,8 +75,10 @@ bool Lcakf::step(double dt_s, double measured_x_m, double measured_y_m) noexcept
   }
   const double accel_var = noise_.accel_mps2 * noise_.accel_mps2;
   const double meas_var = noise_.position_m * noise_.position_m;
-  Vector2 x = x_, y = y_;
-  Matrix2 px = px_, py = py_;
+  Vector2 x = x_;
+  Vector2 y = y_;
+  Matrix2 px = px_;
+  Matrix2 py = py_;
   if (!axis_step(x, px, dt_s, measured_x_m, accel_var, meas_var)) return false;
   if (!axis_step(y, py, dt_s, measured_y_m, accel_var, meas_var)) return false;
   x_ = x;

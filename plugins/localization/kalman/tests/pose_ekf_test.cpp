@@ -22,7 +22,8 @@ PoseEkf make_filter(const EkfNoise& noise, double bias_sigma) {
 
 TEST(PoseEkf, GyroBiasConvergesOnStraightLine) {
   // Exact odometry of a straight run at 0.3 m/s; the gyro reads bias + white noise.
-  const double bias = 0.01, v = 0.3;
+  const double bias = 0.01;
+  const double v = 0.3;
   EkfNoise noise;
   PoseEkf ekf = make_filter(noise, 0.02);
   std::mt19937_64 rng(42);
@@ -62,9 +63,12 @@ TEST(PoseEkf, CovarianceStaysSymmetricPsdOverLongRandomRun) {
   std::mt19937_64 rng(1234);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  std::bernoulli_distribution gyro_ok(0.9), fix(0.01);
+  std::bernoulli_distribution gyro_ok(0.9);
+  std::bernoulli_distribution fix(0.01);
   for (int i = 0; i < 200000; ++i) {
-    const double v = 0.5 * uni(rng), vy = 0.1 * uni(rng), w = 1.5 * uni(rng);
+    const double v = 0.5 * uni(rng);
+    const double vy = 0.1 * uni(rng);
+    const double w = 1.5 * uni(rng);
     const Pose2 delta{v * kDt, vy * kDt, w * kDt};
     ASSERT_EQ(ekf.step(delta, kDt, w + 0.01 + 0.002 * gauss(rng), gyro_ok(rng)), EkfResult::kOk)
         << "step " << i;

@@ -76,9 +76,8 @@ void EgCovariance::step(const Pose2& delta, double dt_s, double chord_yaw_rad,
 }
 
 void EgCovariance::pose_covariance(std::array<double, 9>& out) const noexcept {
-  for (int r = 0; r < 3; ++r) {
-    for (int col = 0; col < 3; ++col) out[static_cast<std::size_t>(3 * r + col)] = p_(r, col);
-  }
+  // The pose block (x, y, yaw), row by row.
+  Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(out.data()) = p_.topLeftCorner<3, 3>();
 }
 
 }  // namespace swivel::localization
