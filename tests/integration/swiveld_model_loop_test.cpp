@@ -196,7 +196,11 @@ TEST(SwiveldModelLoop, WhatTheGapWorkflowNamesReachesTheRobotsEstimate) {
 
   daemon.signal(SIGTERM);
   EXPECT_EQ(daemon.exit_code(Seconds(10)), 0) << daemon.err();
-  std::filesystem::remove_all(dir);
+  if (HasFailure()) {
+    std::cout << "kept for a look: " << dir << " (the runs, the report, the models)\n";
+  } else {
+    std::filesystem::remove_all(dir);
+  }
 }
 
 }  // namespace

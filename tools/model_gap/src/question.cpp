@@ -96,8 +96,10 @@ Fitted fit_pair(const QuestionState& s, const Fitted& chosen, const Fitted& othe
   return p;
 }
 
-// A second effect, only when the chosen one leaves a pattern behind: the best singles are
-// tried beside it (refitted on the whole run first if they were screened).
+// A second effect, only when the chosen one leaves a pattern behind or another candidate is
+// significant on its own (two effects of one channel, such as a gyro bias and a wheel-radius
+// difference both turning the heading, can leave no pattern either's misfit tests see): the
+// best singles are tried beside it (refitted on the whole run first if they were screened).
 void second_effect(QuestionState& s, const std::vector<Candidate>& library,
                    const QuestionOptions& options) {
   if (!s.replay.nuisance.empty()) refit_chosen_nuisance(s, options);
@@ -105,7 +107,7 @@ void second_effect(QuestionState& s, const std::vector<Candidate>& library,
   s.eval.evaluate(s.chosen->effects, s.chosen->fit.values, false, raw, false);
   const std::vector<MisfitTest> left =
       misfit_tests(misfit_inputs(s.replay, raw, s.eval.sigma(), s.residuals_before));
-  if (!pattern_left(left, options)) return;
+  if (!pattern_left(left, options) && !another_significant(s.singles, s.chosen, options)) return;
   const auto chosen_index = static_cast<std::size_t>(s.chosen - s.singles.data());
   std::size_t tried = 0;
   for (std::size_t k : pair_order(s.singles)) {

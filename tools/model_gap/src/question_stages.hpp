@@ -150,6 +150,10 @@ const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vecto
                             double nominal_bic, const QuestionOptions& options);
 /// Whether the chosen effect leaves a pattern a second effect could take.
 bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options);
+/// Whether a single candidate other than `chosen` is significant on its own: evidence of a
+/// second effect even when the chosen one leaves no pattern the misfit tests see.
+bool another_significant(const std::vector<Fitted>& singles, const Fitted* chosen,
+                         const QuestionOptions& options);
 /// The singles to try beside the chosen one, best first (by BIC against the nominal model on
 /// the stretch each was fitted on).
 std::vector<std::size_t> pair_order(const std::vector<Fitted>& singles);

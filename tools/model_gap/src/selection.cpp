@@ -62,6 +62,12 @@ bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& op
   });
 }
 
+bool another_significant(const std::vector<Fitted>& singles, const Fitted* chosen,
+                         const QuestionOptions& options) {
+  return std::any_of(singles.begin(), singles.end(),
+                     [&](const Fitted& f) { return &f != chosen && significant(f, options); });
+}
+
 std::vector<std::size_t> pair_order(const std::vector<Fitted>& singles) {
   std::vector<std::size_t> pool(singles.size());
   std::iota(pool.begin(), pool.end(), 0U);

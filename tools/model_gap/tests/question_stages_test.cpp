@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -189,6 +190,21 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
   EXPECT_NE(result.summary.find("significant at 7.5 sigma, an RMS change of 1.8 noise sigmas"),
             std::string::npos)
       << result.summary;
+}
+
+// A second effect is looked for when another single is significant on its own, even with no
+// pattern left (a gyro bias and a wheel-radius difference both turn the heading).
+TEST(QuestionSelection, AnotherSignificantSingleCallsForAPair) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  std::vector<Fitted> singles = {fitted({&a}, -50.0, 9.0, 1.0), fitted({&b}, -20.0, 4.9, 1.0)};
+  EXPECT_FALSE(another_significant(singles, singles.data(), options));
+  singles[1] = fitted({&b}, -20.0, 5.8, 1.0);
+  EXPECT_TRUE(another_significant(singles, singles.data(), options));
+  EXPECT_TRUE(another_significant(singles, std::next(singles.data()), options));
+  singles[1].fit.ok = false;
+  EXPECT_FALSE(another_significant(singles, singles.data(), options));
 }
 
 // The noise the fit took, against what the model's sensor figures state: a channel at or
