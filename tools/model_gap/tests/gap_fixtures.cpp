@@ -86,8 +86,8 @@ RunLog simulate_run(const RobotModel& nominal, const RobotModel& truth, double d
   RunLog log;
   log.source = "simulated";
   log.header = run_log_header(nominal);
-  log.header.comments.push_back("truth_clock: shared");  // the world's own truth
-  log.header.comments.push_back("truth_frame: robot");
+  log.header.comments.emplace_back("truth_clock: shared");  // the world's own truth
+  log.header.comments.emplace_back("truth_frame: robot");
   log.header.gyro_mean_over_row = true;  // one read a row: the world's mean since the last
   const auto rows = static_cast<std::size_t>(std::llround(duration_s * rate_hz)) + 1;
   const double dt = 1.0 / rate_hz;
@@ -142,8 +142,8 @@ RunLog record_like_swiveld(const RobotModel& nominal, const RobotModel& truth,
   RunLog log;
   log.source = "recorded like swiveld";
   log.header = run_log_header(nominal);
-  log.header.comments.push_back("truth_clock: shared");  // the simulated world's truth
-  log.header.comments.push_back("truth_frame: robot");
+  log.header.comments.emplace_back("truth_clock: shared");  // the simulated world's truth
+  log.header.comments.emplace_back("truth_frame: robot");
   const auto cycles_per_row = static_cast<std::int64_t>(std::llround(1.0 / (rate_hz * kCycleS)));
   const auto cycles = static_cast<std::int64_t>(std::llround(duration_s / kCycleS));
   HardwareState hw;
