@@ -32,6 +32,7 @@ std::string read_text(const fs::path& p) {
   return s.str();
 }
 
+// NOLINTNEXTLINE(bugprone-exception-escape): seen in nlohmann::json's own destructor
 struct LabRun {
   int status = -1;
   std::string out;
@@ -41,25 +42,26 @@ struct LabRun {
 class ReproduceDocentTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ =
+    root_dir =
         fs::temp_directory_path() / ("swivel_reproduce_docent_test_" + std::to_string(::getpid()));
-    fs::create_directories(root_);
-    first_ = new LabRun(reproduce("a", 7));
+    fs::create_directories(root_dir);
+    first_run = new LabRun(reproduce("a", 7));
   }
   static void TearDownTestSuite() {
-    delete first_;
-    first_ = nullptr;
-    fs::remove_all(root_);
+    delete first_run;
+    first_run = nullptr;
+    fs::remove_all(root_dir);
   }
 
   static LabRun reproduce(const std::string& name, int seed) {
-    const fs::path dir = root_ / name;
-    const fs::path stdout_file = root_ / (name + ".out");
+    const fs::path dir = root_dir / name;
+    const fs::path stdout_file = root_dir / (name + ".out");
     const std::string cmd = std::string(SWIVEL_LAB_EXE) + " reproduce docent --short --seed " +
                             std::to_string(seed) + " --model " + source_dir() +
                             "/config/robots/docent.yaml --out " + dir.string() + " >" +
                             stdout_file.string() + " 2>&1";
     LabRun r;
+    // The shell redirects the tool's output. NOLINTNEXTLINE(cert-env33-c)
     const int status = std::system(cmd.c_str());
     r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = read_text(stdout_file);
@@ -72,12 +74,12 @@ class ReproduceDocentTest : public ::testing::Test {
     return r.results.at("scenarios").at(scenario).at("summary").at(method).at(key).get<double>();
   }
 
-  static fs::path root_;
-  static LabRun* first_;
+  static fs::path root_dir;
+  static LabRun* first_run;
 };
 
-fs::path ReproduceDocentTest::root_;
-LabRun* ReproduceDocentTest::first_ = nullptr;
+fs::path ReproduceDocentTest::root_dir;
+LabRun* ReproduceDocentTest::first_run = nullptr;
 
 bool has_line_starting(const std::string& text, const std::string& prefix) {
   std::istringstream in(text);
@@ -88,15 +90,15 @@ bool has_line_starting(const std::string& text, const std::string& prefix) {
 }
 
 TEST_F(ReproduceDocentTest, WritesResultsAndNonTrivialPngPlots) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
   for (const char* png : {"trajectories.png", "errors.png"}) {
-    const fs::path p = root_ / "a" / png;
+    const fs::path p = root_dir / "a" / png;
     ASSERT_TRUE(fs::exists(p)) << p;
     EXPECT_GT(fs::file_size(p), 10000U) << p;  // a drawn plot, not an empty canvas
     EXPECT_EQ(read_text(p).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
   }
-  ASSERT_TRUE(first_->results.is_object());
-  const json& scenarios = first_->results.at("scenarios");
+  ASSERT_TRUE(first_run->results.is_object());
+  const json& scenarios = first_run->results.at("scenarios");
   ASSERT_EQ(scenarios.size(), 2U);
   EXPECT_EQ(scenarios[0].at("name"), "S1");
   EXPECT_EQ(scenarios[1].at("name"), "S2");
@@ -108,12 +110,12 @@ TEST_F(ReproduceDocentTest, WritesResultsAndNonTrivialPngPlots) {
       EXPECT_EQ(run.at("methods").at("eg").at("errors_m").size(), 16U);
     }
   }
-  EXPECT_FALSE(first_->results.at("assumptions").empty());
+  EXPECT_FALSE(first_run->results.at("assumptions").empty());
 }
 
 TEST_F(ReproduceDocentTest, PrintsThePapersTablesWithOursBesideThePapers) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
-  const std::string& out = first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
+  const std::string& out = first_run->out;
   for (const char* heading :
        {"Assumptions:", "Table 1. Maximum error (cm", "Table 2. Mean error per run (cm), S1",
         "Table 2. Mean error per run (cm), S2", "Table 3. Reduction ratios (%)",
@@ -138,30 +140,31 @@ TEST_F(ReproduceDocentTest, PrintsThePapersTablesWithOursBesideThePapers) {
 }
 
 TEST_F(ReproduceDocentTest, TableEntriesCarryTheirStandardErrorOverRuns) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
   for (std::size_t s = 0; s < 2; ++s) {
     // Worked out again from the runs: the mean of the maxima and its standard error.
     std::vector<double> maxes;
-    for (const json& run : first_->results.at("scenarios").at(s).at("runs")) {
+    for (const json& run : first_run->results.at("scenarios").at(s).at("runs")) {
       maxes.push_back(run.at("methods").at("eg").at("max_error_m").get<double>());
     }
     ASSERT_EQ(maxes.size(), 2U);
     const double mean = 0.5 * (maxes[0] + maxes[1]);
     // Two values: sample std |a - b| / sqrt(2), over sqrt(2).
     const double se = std::abs(maxes[0] - maxes[1]) / 2.0;
-    EXPECT_NEAR(summary(*first_, s, "eg", "mean_max_error_m"), mean, 1e-12) << s;
-    EXPECT_NEAR(summary(*first_, s, "eg", "mean_max_error_standard_error_m"), se, 1e-12) << s;
+    EXPECT_NEAR(summary(*first_run, s, "eg", "mean_max_error_m"), mean, 1e-12) << s;
+    EXPECT_NEAR(summary(*first_run, s, "eg", "mean_max_error_standard_error_m"), se, 1e-12) << s;
     // E/G against itself: no reduction, and no doubt about it.
-    EXPECT_NEAR(summary(*first_, s, "eg", "max_error_reduction_vs_eg"), 0.0, 1e-12) << s;
-    EXPECT_NEAR(summary(*first_, s, "eg", "max_error_reduction_vs_eg_standard_error"), 0.0, 1e-12);
+    EXPECT_NEAR(summary(*first_run, s, "eg", "max_error_reduction_vs_eg"), 0.0, 1e-12) << s;
+    EXPECT_NEAR(summary(*first_run, s, "eg", "max_error_reduction_vs_eg_standard_error"), 0.0,
+                1e-12);
   }
-  EXPECT_TRUE(has_line_starting(first_->out, "S1 ")) << first_->out;
-  EXPECT_NE(first_->out.find("+-"), std::string::npos);
+  EXPECT_TRUE(has_line_starting(first_run->out, "S1 ")) << first_run->out;
+  EXPECT_NE(first_run->out.find("+-"), std::string::npos);
 }
 
 TEST_F(ReproduceDocentTest, EveryMethodIsFedTheSameNonZeroEgPositions) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
-  for (const json& s : first_->results.at("scenarios")) {
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
+  for (const json& s : first_run->results.at("scenarios")) {
     for (const json& run : s.at("runs")) {
       const json& methods = run.at("methods");
       // The simulated sensors are imperfect: dead reckoning must be off by at least 1 mm.
@@ -176,52 +179,54 @@ TEST_F(ReproduceDocentTest, EveryMethodIsFedTheSameNonZeroEgPositions) {
 }
 
 TEST_F(ReproduceDocentTest, HeadingAlignedBeatsEgOnStraightRunsAndPaperModeBarelyChangesIt) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
   for (std::size_t s = 0; s < 2; ++s) {
-    const double eg = summary(*first_, s, "eg", "mean_max_error_m");
-    EXPECT_LT(summary(*first_, s, "lcalsm_heading_aligned", "mean_max_error_m"), eg) << s;
+    const double eg = summary(*first_run, s, "eg", "mean_max_error_m");
+    EXPECT_LT(summary(*first_run, s, "lcalsm_heading_aligned", "mean_max_error_m"), eg) << s;
     // The faithful k-point fit cannot see drift that is smooth over metres (the documented
     // finding): within 20 % of E/G either way.
-    EXPECT_NEAR(summary(*first_, s, "lcalsm_paper", "mean_max_error_m"), eg, 0.2 * eg) << s;
+    EXPECT_NEAR(summary(*first_run, s, "lcalsm_paper", "mean_max_error_m"), eg, 0.2 * eg) << s;
   }
 }
 
 TEST_F(ReproduceDocentTest, SameSeedGivesIdenticalResultsAndAnotherSeedDoesNot) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
   const LabRun again = reproduce("b", 7);
   ASSERT_EQ(again.status, 0) << again.out;
-  EXPECT_EQ(again.results.at("scenarios"), first_->results.at("scenarios"));
+  EXPECT_EQ(again.results.at("scenarios"), first_run->results.at("scenarios"));
   const LabRun other = reproduce("c", 8);
   ASSERT_EQ(other.status, 0) << other.out;
   EXPECT_NE(summary(other, 0, "eg", "mean_max_error_m"),
-            summary(*first_, 0, "eg", "mean_max_error_m"));
+            summary(*first_run, 0, "eg", "mean_max_error_m"));
 }
 
 TEST_F(ReproduceDocentTest, FindsTheRepositoryModelFromAnyWorkingDirectory) {
-  ASSERT_EQ(first_->status, 0) << first_->out;
+  ASSERT_EQ(first_run->status, 0) << first_run->out;
   // No --model, run from a directory with no config/ in it: the default model is the
   // repository's config/robots/docent.yaml, so the same seed gives the same results.
-  const fs::path dir = root_ / "elsewhere";
+  const fs::path dir = root_dir / "elsewhere";
   fs::create_directories(dir);
   const std::string cmd = "cd " + dir.string() + " && " + SWIVEL_LAB_EXE +
                           " reproduce docent --short --seed 7 --out out >run.out 2>&1";
+  // The shell redirects the tool's output. NOLINTNEXTLINE(cert-env33-c)
   const int status = std::system(cmd.c_str());
   ASSERT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0) << read_text(dir / "run.out");
   const json results = json::parse(read_text(dir / "out" / "results.json"));
-  EXPECT_EQ(results.at("scenarios"), first_->results.at("scenarios"));
+  EXPECT_EQ(results.at("scenarios"), first_run->results.at("scenarios"));
 }
 
 TEST_F(ReproduceDocentTest, RejectsANonDifferentialRobot) {
-  const fs::path model = root_ / "swpc.yaml";
+  const fs::path model = root_dir / "swpc.yaml";
   fs::copy_file(source_dir() + "/config/robots/swpc4.yaml", model,
                 fs::copy_options::overwrite_existing);
   const std::string cmd = std::string(SWIVEL_LAB_EXE) + " reproduce docent --short --model " +
-                          model.string() + " --out " + (root_ / "d").string() + " >" +
-                          (root_ / "d.out").string() + " 2>&1";
+                          model.string() + " --out " + (root_dir / "d").string() + " >" +
+                          (root_dir / "d.out").string() + " 2>&1";
+  // The shell redirects the tool's output. NOLINTNEXTLINE(cert-env33-c)
   const int status = std::system(cmd.c_str());
   EXPECT_NE(WIFEXITED(status) ? WEXITSTATUS(status) : 0, 0);
-  EXPECT_NE(read_text(root_ / "d.out").find("needs a differential robot"), std::string::npos)
-      << read_text(root_ / "d.out");
+  EXPECT_NE(read_text(root_dir / "d.out").find("needs a differential robot"), std::string::npos)
+      << read_text(root_dir / "d.out");
 }
 
 }  // namespace

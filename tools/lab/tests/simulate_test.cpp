@@ -36,6 +36,7 @@ class LabSimulateTest : public ::testing::Test {
     const std::string err = (dir_ / "stderr.txt").string();
     const std::string cmd = std::string(SWIVEL_LAB_EXE) + " simulate " + args + " --out " +
                             (dir_ / out).string() + " >/dev/null 2>" + err;
+    // The shell redirects the tool's output. NOLINTNEXTLINE(cert-env33-c)
     const int status = std::system(cmd.c_str());
     std::ifstream in(err);
     std::stringstream text;
@@ -43,7 +44,9 @@ class LabSimulateTest : public ::testing::Test {
     error_ = text.str();
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
-  std::string robot(const std::string& name) { return source_dir() + "/config/robots/" + name; }
+  static std::string robot(const std::string& name) {
+    return source_dir() + "/config/robots/" + name;
+  }
   std::string read(const std::string& name) {
     std::ifstream in(dir_ / name);
     std::stringstream s;
