@@ -34,7 +34,11 @@ NoiseModel estimate_noise(const std::vector<double>& residuals, std::size_t wind
       a = std::max(floor_variance[c], *mid / 0.455);
       // Weighted least squares of r^2 on (1, x): the variance of r^2 grows as (a + b x)^2.
       for (int iteration = 0; iteration < 4; ++iteration) {
-        double s00 = 0.0, s01 = 0.0, s11 = 0.0, t0 = 0.0, t1 = 0.0;
+        double s00 = 0.0;
+        double s01 = 0.0;
+        double s11 = 0.0;
+        double t0 = 0.0;
+        double t1 = 0.0;
         for (std::size_t j = 0; j < windows; ++j) {
           const double r = residuals[c * windows + j];
           const double xj = x[c][j];
