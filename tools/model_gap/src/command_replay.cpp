@@ -128,10 +128,13 @@ void follow_logged_branch(const sim::PlantParams& plant, const Twist2& twist, co
 
 CommandReplay::CommandReplay(const RobotModel& nominal, const RunData& run,
                              const SensorReplay& sensors, const std::vector<Pose2>& path)
-    : nominal_(nominal), run_(&run), sensors_(&sensors), windows_(&sensors.windows()) {
+    : nominal_(nominal),
+      run_(&run),
+      sensors_(&sensors),
+      windows_(&sensors.windows()),
+      swpc_(run.drivetrain == DrivetrainKind::kSwpc),
+      modules_(run.module_count) {
   check_run_fits_model(nominal, run);
-  swpc_ = run.drivetrain == DrivetrainKind::kSwpc;
-  modules_ = run.module_count;
   const std::size_t n = run.size();
   row_period_s_ = (run.t_s.back() - run.t_s.front()) / static_cast<double>(n - 1);
   for (std::size_t i = 0; i < modules_; ++i) {
@@ -240,7 +243,7 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
   if (!simulate(model, command_delay_s, end_row, false, track_)) return false;
   const RunData& run = *run_;
   for (std::size_t j = 0; j < used; ++j) {
-    if (!compared_[j]) continue;
+    if (compared_[j] == 0) continue;
     const std::size_t a = windows[j].a;
     const std::size_t b = windows[j].b;
     std::size_t c = 0;
@@ -260,10 +263,7 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
       }
     }
   }
-  for (double v : out) {
-    if (std::isinf(v)) return false;
-  }
-  return true;
+  return std::ranges::none_of(out, [](double v) { return std::isinf(v); });
 }
 
 std::vector<double> CommandReplay::timing_variance(const RobotModel& model,

@@ -327,7 +327,7 @@ Twist2 World::swpc_twist(const ActuatorCommand& command, const double* ground) n
   const Eigen::Matrix3d ata = used_a.transpose() * used_a;
   const Eigen::Vector3d atb = used_a.transpose() * used_b;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(ata);
-  const Eigen::Vector3d values = eig.eigenvalues();
+  const Eigen::Vector3d& values = eig.eigenvalues();
   const double cutoff = 1e-12 * std::max(values.maxCoeff(), 1e-300);
   Eigen::Vector3d x = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) {
