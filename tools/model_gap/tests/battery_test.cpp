@@ -13,7 +13,8 @@
 #include "battery_scoring.hpp"
 
 namespace swivel::independent {
-// Test names and failures show the case by its id.
+// Test names and failures show the case by its id (GoogleTest finds the printer by this name).
+// NOLINTNEXTLINE(readability-identifier-naming)
 void PrintTo(const BatteryCase& c, std::ostream* os) { *os << c.id; }
 }  // namespace swivel::independent
 
