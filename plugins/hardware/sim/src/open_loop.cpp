@@ -5,6 +5,7 @@
 #include <cmath>
 #include <span>
 #include <stdexcept>
+#include <utility>
 
 #include "swivel/differential/differential_kinematics.hpp"
 #include "swivel/swpc/swpc_kinematics.hpp"
@@ -27,8 +28,9 @@ Twist2 rotation_about(double cx, double cy, double w) noexcept {
 OpenLoopController::OpenLoopController(const RobotModel& nominal)
     : OpenLoopController(nominal, nominal.limits) {}
 
-OpenLoopController::OpenLoopController(const RobotModel& nominal, const MotionLimits& limits)
-    : nominal_(nominal), max_steer_rate_radps_(limits.steering_rate_radps.value_or(0.0)) {
+OpenLoopController::OpenLoopController(RobotModel nominal, const MotionLimits& limits)
+    : nominal_(std::move(nominal)),
+      max_steer_rate_radps_(limits.steering_rate_radps.value_or(0.0)) {
   if (nominal_.drivetrain == DrivetrainKind::kSwpc) {
     if (nominal_.modules.size() < 2 || nominal_.modules.size() > kMaxModules) {
       throw std::invalid_argument("nominal model '" + nominal_.name + "': expected 2.." +

@@ -34,7 +34,7 @@ class OpenLoopController {
   explicit OpenLoopController(const RobotModel& nominal);
   /// The nominal geometry with other limits (the robot's own, when they differ from what the
   /// nominal model states).
-  OpenLoopController(const RobotModel& nominal, const MotionLimits& limits);
+  OpenLoopController(RobotModel nominal, const MotionLimits& limits);
 
   /// Real-time safe. Setpoints for body twist `twist` given the current readings: wheel
   /// rates (differential; vy is ignored) or every module's wheel and steering rate at its
