@@ -101,9 +101,13 @@ std::string run_log_text(const RunSpec& spec, const std::vector<Row>& rows) {
               : "# drivetrain: differential\n";
   out += "# source: swivel-second-run (second robot generator), seed " + std::to_string(spec.seed) +
          ", " + number(spec.row_rate_hz) + " Hz rows, script " + script_name(spec.script) + "\n";
-  // Motion capture without latency is as good as stamped on the robot's clock; with its
-  // own latency it is not, and the workflow fits the offset.
-  if (spec.truth.mocap_latency_s == 0.0) out += "# truth_clock: shared\n";
+  // Motion capture without latency or clock drift is as good as stamped on the robot's clock;
+  // with its own latency it is not, and the workflow fits the offset; a clock that also runs
+  // at its own rate leaves the header silent, and the workflow fits the rate too.
+  if (spec.truth.mocap_clock_rate == 0.0) {
+    out += spec.truth.mocap_latency_s == 0.0 ? "# truth_clock: shared\n"
+                                             : "# truth_clock: same_rate\n";
+  }
   out += "t,cmd_vx,cmd_vy,cmd_wz";
   if (swpc) {
     for (std::size_t i = 1; i <= n; ++i) out += ",steer_" + std::to_string(i);
@@ -241,6 +245,7 @@ void set_truth(RunSpec& spec, const std::string& assignment) {
       {"tyre.friction", &t.friction_coefficient},
       {"steering.friction_nm", &t.steering_friction_nm},
       {"mocap.latency_s", &t.mocap_latency_s},
+      {"mocap.clock_rate", &t.mocap_clock_rate},
       {"mocap.marker_x_m", &t.marker_x_m},
       {"mocap.marker_y_m", &t.marker_y_m},
       {"mocap.marker_yaw_rad", &t.marker_yaw_rad},

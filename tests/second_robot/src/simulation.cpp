@@ -332,6 +332,10 @@ void check(const RunSpec& spec) {
       t.steering_lag_s < 0 || t.steering_lag_s > 1) {
     throw std::invalid_argument("delays and lags must be within [0, 0.5] s (lags [0, 1] s)");
   }
+  if (!(t.mocap_clock_rate >= 0.0 && t.mocap_clock_rate <= 0.01)) {
+    throw std::invalid_argument("mocap clock rate " + std::to_string(t.mocap_clock_rate) +
+                                ": outside [0, 0.01]");
+  }
 }
 
 }  // namespace
@@ -435,7 +439,7 @@ std::vector<Row> simulate(const RunSpec& spec) {
       next_frame += mocap_period;
     }
     if (frame && !mocap_rng.chance(kMocapLossProbability)) {
-      const std::vector<double> seen = history.at(t - tr.mocap_latency_s);
+      const std::vector<double> seen = history.at(t - tr.mocap_latency_s - tr.mocap_clock_rate * t);
       const double c = std::cos(seen[2]);
       const double sn = std::sin(seen[2]);
       row.has_mocap = true;

@@ -157,7 +157,8 @@ TEST(SecondRobotSensors, MotionCaptureSeesTheMarkerLate) {
   set_truth(spec, "mocap.marker_x_m=0.05");
   set_truth(spec, "mocap.marker_y_m=-0.02");
   set_truth(spec, "mocap.marker_yaw_rad=0.04");
-  EXPECT_EQ(generate(spec).run_csv.find("truth_clock"), std::string::npos);
+  // Its own latency on a clock of the robot's rate: the offset is for the workflow to fit.
+  EXPECT_NE(generate(spec).run_csv.find("# truth_clock: same_rate\n"), std::string::npos);
   const std::vector<Row> rows = simulate(spec);
   std::size_t checked = 0;
   for (std::size_t j = 3; j < rows.size(); ++j) {
@@ -171,6 +172,32 @@ TEST(SecondRobotSensors, MotionCaptureSeesTheMarkerLate) {
     ++checked;
   }
   EXPECT_GT(checked, rows.size() * 9 / 10);
+}
+
+TEST(SecondRobotSensors, MotionCaptureClockDriftsAtItsRate) {
+  RunSpec spec = short_run("wide_diff", 100, 9);
+  spec.noise = false;
+  set_truth(spec, "mocap.clock_rate=0.005");
+  // A clock of its own rate: the header says nothing, and the workflow fits offset and rate.
+  EXPECT_EQ(generate(spec).run_csv.find("truth_clock"), std::string::npos);
+  const std::vector<Row> rows = simulate(spec);
+  std::size_t checked = 0;
+  for (std::size_t j = 1; j < rows.size(); ++j) {
+    if (!rows[j].has_mocap) continue;
+    // A frame at t shows the robot at t - 0.005 t: between the rows around that instant.
+    const double seen_s = rows[j].t_s * (1.0 - 0.005);
+    std::size_t k = j;
+    while (k > 0 && rows[k].t_s > seen_s) --k;
+    const double f = (seen_s - rows[k].t_s) / (rows[k + 1].t_s - rows[k].t_s);
+    EXPECT_NEAR(rows[j].mocap[0], rows[k].pose[0] + f * (rows[k + 1].pose[0] - rows[k].pose[0]),
+                2e-4);
+    EXPECT_NEAR(rows[j].mocap[1], rows[k].pose[1] + f * (rows[k + 1].pose[1] - rows[k].pose[1]),
+                2e-4);
+    ++checked;
+  }
+  EXPECT_GT(checked, rows.size() * 9 / 10);
+  set_truth(spec, "mocap.clock_rate=-0.001");
+  EXPECT_THROW((void)simulate(spec), std::invalid_argument);
 }
 
 // Ground covered by each contact against what its wheel turned (r dpsi), over the run.

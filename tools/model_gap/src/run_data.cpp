@@ -47,6 +47,7 @@ RunData to_run_data(const RunLog& log) {
   }
   for (const std::string& comment : log.header.comments) {
     if (comment == "truth_clock: shared") d.truth_clock_shared = true;
+    if (comment == "truth_clock: same_rate") d.truth_clock_same_rate = true;
     if (comment == "truth_frame: robot") d.truth_frame_is_robot = true;
   }
   // Motion capture reports a wrapped heading; unwrapped it interpolates and plots cleanly.

@@ -81,6 +81,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
       swpc_(run.drivetrain == DrivetrainKind::kSwpc),
       gyro_(run.has_gyro),
       fit_time_offset_(!run.truth_clock_shared),
+      fit_clock_rate_(!run.truth_clock_shared && !run.truth_clock_same_rate),
       fit_body_offset_(!run.truth_frame_is_robot),
       modules_(run.module_count) {
   check_run_fits_model(nominal, run);
@@ -115,10 +116,16 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   if (fit_time_offset_)
     nuisance_.push_back(
         {"truth.time_offset_s", 0.0, 1e-2, -kMaxTimeOffsetS, kMaxTimeOffsetS, kNaN, true});
+  // Scale: a millisecond a second.
+  if (fit_clock_rate_)
+    nuisance_.push_back({"truth.clock_rate", 0.0, 1e-3, -kMaxClockRate, kMaxClockRate, kNaN, true});
+  clock_reference_s_ = 0.5 * (run.t_s.front() + run.t_s.back());
 
   // The windows leave room at the ends for the longest shift a fit may try.
-  const double lead = fit_time_offset_ ? kMaxTimeOffsetS : 0.0;
-  const double tail = fit_time_offset_ ? kMaxTimeOffsetS + kMaxLatencyS : kMaxLatencyS;
+  const double drift =
+      fit_clock_rate_ ? kMaxClockRate * 0.5 * (run.t_s.back() - run.t_s.front()) : 0.0;
+  const double lead = fit_time_offset_ ? kMaxTimeOffsetS + drift : 0.0;
+  const double tail = fit_time_offset_ ? kMaxTimeOffsetS + drift + kMaxLatencyS : kMaxLatencyS;
   windows_ = make_windows(run, window_s, run.t_s.front() + lead, run.t_s.back() - tail);
   motion_ = window_motion(run, windows_);
   // Anchors use the nominal dead reckoning as the local shape of the path.
@@ -138,6 +145,7 @@ TruthNuisance SensorReplay::truth(std::span<const double> values) const {
     if (name == "truth.lever_x_m") n.lever_x_m = values[i];
     if (name == "truth.lever_y_m") n.lever_y_m = values[i];
     if (name == "truth.time_offset_s") n.time_offset_s = values[i];
+    if (name == "truth.clock_rate") n.clock_rate = values[i];
   }
   return n;
 }
@@ -233,11 +241,11 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   const std::size_t used = std::min(w, window_limit);
   // Rows up to the last window's end plus the longest latency a fit may try.
   std::size_t end_row = run_->size();
-  const double shift = plant.sensor_delay_s - truth.time_offset_s;
   if (used > 0 && used < w) {
+    const double last = run_->t_s[windows_[used - 1].b];
+    const double shift = shift_at(plant.sensor_delay_s, truth, last);
     end_row = windows_[used - 1].b + 1;
-    while (end_row < run_->size() &&
-           run_->t_s[end_row - 1] < run_->t_s[windows_[used - 1].b] + std::max(shift, 0.0))
+    while (end_row < run_->size() && run_->t_s[end_row - 1] < last + std::max(shift, 0.0))
       ++end_row;
   }
   if (!integrate(plant, start_, end_row)) return false;
@@ -253,8 +261,8 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
     const Pose2& ma = anchor_a_[j];
     const Pose2& mb = anchor_b_[j];
     if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m)) continue;
-    const double ta = t[windows_[j].a] + shift;
-    const double tb = t[windows_[j].b] + shift;
+    const double ta = t[windows_[j].a] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].a]);
+    const double tb = t[windows_[j].b] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].b]);
     const Pose2 measured = compose(compose(body, between(ma, mb)), body_inverse);
     const Pose2 predicted = between(pose_at(ta), pose_at(tb));
     const double encoder_turn = encoder_yaw_at(tb) - encoder_yaw_at(ta);
@@ -273,9 +281,9 @@ void SensorReplay::path(const sim::PlantParams& plant, const TruthNuisance& trut
   const Pose2 body = truth.body();
   // The robot starts where the tracked body at rest says it is.
   if (!integrate(plant, compose(start_, inverse(body)), n)) return;
-  const double shift = plant.sensor_delay_s - truth.time_offset_s;
   for (std::size_t k = 0; k < n; ++k) {
-    const Pose2 robot = pose_at(run_->t_s[k] + shift);
+    const double t = run_->t_s[k];
+    const Pose2 robot = pose_at(t + shift_at(plant.sensor_delay_s, truth, t));
     // Keep the unwrapped heading: compose() leaves the sum unwrapped.
     out[k] = compose(robot, body);
   }

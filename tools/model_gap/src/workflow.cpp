@@ -277,6 +277,9 @@ std::vector<std::string> truth_nuisance_lines(const GapResult& r) {
     } else if (n == "truth.time_offset_s") {
       out.push_back("motion capture's clock offset (late against the encoders): " +
                     plus_minus(v[i], sigma(i), 1e3, 1) + " ms");
+    } else if (n == "truth.clock_rate") {
+      out.push_back("motion capture's clock rate against the encoders' (the offset's growth): " +
+                    plus_minus(v[i], sigma(i), 1e3, 2) + " ms/s");
     }
   }
   return out;

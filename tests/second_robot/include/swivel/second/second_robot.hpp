@@ -79,6 +79,10 @@ struct Truth {
   double steering_friction_nm = 0.01;      ///< Coulomb friction of each steering axis
   // Motion capture: its own latency and where the tracked body sits on the robot.
   double mocap_latency_s = 0.0;
+  /// The motion capture's clock runs this much faster than the robot's (s/s, 0..0.01): a
+  /// frame at t shows the robot at t - latency - rate * t, as a log synchronised by hand at
+  /// its start and end is.
+  double mocap_clock_rate = 0.0;
   double marker_x_m = 0.0;  ///< lever arm, robot frame
   double marker_y_m = 0.0;
   double marker_yaw_rad = 0.0;

@@ -37,6 +37,10 @@ struct RunData {
   /// The motion capture is stamped on the robot's own clock (`# truth_clock: shared`, e.g.
   /// a simulator's): its time offset is known to be zero and is not fitted.
   bool truth_clock_shared = false;
+  /// The motion capture's clock runs at the robot clock's rate, offset by an unknown constant
+  /// (`# truth_clock: same_rate`, e.g. stamped on receipt by a live link): its offset is
+  /// fitted, not its rate.
+  bool truth_clock_same_rate = false;
   /// The motion capture reports the robot's own reference frame (`# truth_frame: robot`, e.g.
   /// a simulator's truth): the tracked body's offset on the robot is known to be zero.
   bool truth_frame_is_robot = false;

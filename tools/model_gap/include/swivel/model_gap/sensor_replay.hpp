@@ -20,7 +20,16 @@
 //   truth.time_offset_s    how late the motion capture's time stamps are against the
 //                          encoders' (either sign); fitted only when the run does not declare
 //                          a shared clock (`# truth_clock: shared`), since in this question it
-//                          cannot be told from a sensor latency
+//                          cannot be told from a sensor latency; the offset at the run's
+//                          middle
+//   truth.clock_rate       how much faster the motion capture's clock runs than the encoders'
+//                          (s/s): a log synchronised by hand at its start and end carries both
+//                          pick errors as an offset that changes linearly over the run. It
+//                          shows where the speed changes (the offset differs between the start
+//                          and the end) and scales all motion alike (a mocap second that is
+//                          longer covers more of it), so a common wheel-radius scale is fixed
+//                          only by the accelerations. Fitted with the offset, except where the
+//                          log declares the clocks run at one rate (`# truth_clock: same_rate`)
 // A run whose truth is the robot's own reference frame (`# truth_frame: robot`, a simulator's)
 // fits neither the yaw offset nor the lever arm.
 
@@ -42,6 +51,7 @@ struct TruthNuisance {
   double lever_x_m = 0.0;
   double lever_y_m = 0.0;
   double time_offset_s = 0.0;
+  double clock_rate = 0.0;  ///< the offset grows by this much per second of the run
 
   /// The tracked body's pose in the robot frame.
   [[nodiscard]] Pose2 body() const { return Pose2{lever_x_m, lever_y_m, yaw_offset_rad}; }
@@ -54,6 +64,9 @@ class SensorReplay {
   /// Largest motion-capture clock offset fitted, either sign (hand-synchronised logs are
   /// seen up to about a third of a second out).
   static constexpr double kMaxTimeOffsetS = 0.5;
+  /// Largest motion-capture clock rate difference fitted, either sign (OptiOdom's runs: the
+  /// two clocks' spans differ from their median ratio by -0.55 to +0.29 %).
+  static constexpr double kMaxClockRate = 0.01;
 
   /// @throws std::invalid_argument when the run does not fit the model (drivetrain, module
   /// count), is shorter than 10 rows, or has no motion capture.
@@ -66,6 +79,8 @@ class SensorReplay {
   [[nodiscard]] bool uses_gyro() const { return gyro_; }
   /// The motion capture's clock offset is fitted (the run does not declare a shared clock).
   [[nodiscard]] bool fits_time_offset() const { return fit_time_offset_; }
+  /// The motion capture's clock rate is fitted too (its clock may run at its own rate).
+  [[nodiscard]] bool fits_clock_rate() const { return fit_clock_rate_; }
   /// The tracked body's offset on the robot is fitted (the run does not declare that its
   /// truth is the robot's frame).
   [[nodiscard]] bool fits_body_offset() const { return fit_body_offset_; }
@@ -100,11 +115,18 @@ class SensorReplay {
   bool integrate(const sim::PlantParams& plant, const Pose2& start, std::size_t end_row) const;
   Pose2 pose_at(double t_s) const;
   double encoder_yaw_at(double t_s) const;
+  /// How much later than its row the encoders' time is that the motion capture of a row at
+  /// t_s shows: the sensor delay less the motion capture's clock offset there.
+  double shift_at(double sensor_delay_s, const TruthNuisance& truth, double t_s) const {
+    return sensor_delay_s - truth.time_offset_s - truth.clock_rate * (t_s - clock_reference_s_);
+  }
 
   const RunData* run_ = nullptr;
   bool swpc_ = false;
   bool gyro_ = true;
   bool fit_time_offset_ = true;
+  bool fit_clock_rate_ = true;
+  double clock_reference_s_ = 0.0;  // the run's middle: where truth.time_offset_s applies
   bool fit_body_offset_ = true;
   std::size_t modules_ = 2;
   std::vector<ParamSpec> nuisance_;
