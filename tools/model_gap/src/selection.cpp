@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <sstream>
 
 #include "question_stages.hpp"
 
@@ -40,6 +41,25 @@ bool significant(const Fitted& f, const QuestionOptions& options) {
       return false;
   }
   return true;
+}
+
+std::string not_significant_because(const Fitted& f, const QuestionOptions& options) {
+  const auto fmt = [](double v) {
+    std::ostringstream s;
+    s.precision(2);
+    s << v;
+    return s.str();
+  };
+  if (!f.fit.ok) return "its fit failed";
+  for (std::size_t e = 0; e < f.z.size(); ++e) {
+    if (f.z[e] < options.min_z_name) return "below " + fmt(options.min_z_name) + " sigma";
+    if (f.size[e] < options.min_effect_size) {
+      return "an RMS change of " + fmt(f.size[e]) + " noise sigmas, below " +
+             fmt(options.min_effect_size);
+    }
+    if (!resolved(f, e, options)) return "within what the replay resolves";
+  }
+  return "";
 }
 
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,

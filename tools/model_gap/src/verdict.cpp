@@ -29,20 +29,21 @@ std::string unexplained_summary(const VerdictInputs& in, const MisfitTest& m,
 
 std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& options,
                            const std::string& title) {
-  double best_z = 0.0;
-  std::string best = "none";
+  const Fitted* best = nullptr;
   for (const Fitted& f : *in.singles) {
     if (!f.fit.ok || f.z.empty()) continue;
-    if (f.z[0] > best_z) {
-      best_z = f.z[0];
-      best = f.effects[0]->name;
-    }
+    if (best == nullptr || f.z[0] > best->z[0]) best = &f;
   }
-  return "No significant gap (" + title +
-         "): the model agrees with the run to within its noise "
-         "(most significant candidate " +
-         best + " at " + fmt(best_z, 2) + " sigma, below " + fmt(options.min_z_name, 2) +
-         ", or too small to matter).";
+  std::string why = "no candidate could be fitted";
+  if (best != nullptr) {
+    const std::string because = not_significant_because(*best, options);
+    why = "most significant candidate " + best->effects[0]->name + " at " + fmt(best->z[0], 2) +
+          " sigma: " +
+          (because.empty() ? "not selected, as it did not lower the BIC over the whole run"
+                           : because);
+  }
+  return "No significant gap (" + title + "): the model agrees with the run to within its noise (" +
+         why + ").";
 }
 
 // Effect e of the refitted selection, its parameters from `first` on (`s`: its score).

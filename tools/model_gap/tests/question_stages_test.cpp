@@ -159,7 +159,23 @@ TEST(QuestionVerdict, NoSignificantGapNamesTheMostSignificantSingle) {
   result.misfits = {misfit("heading", 3.0, 2.5)};
   give_verdict({Question::kSensorToPose, &base, &singles, nullptr, &final}, options, result);
   EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
-  EXPECT_NE(result.summary.find("most significant candidate b at 3.5 sigma, below 5"),
+  EXPECT_NE(result.summary.find("most significant candidate b at 3.5 sigma: below 5 sigma"),
+            std::string::npos)
+      << result.summary;
+}
+
+TEST(QuestionVerdict, NoSignificantGapSaysWhyAStrongCandidateWasNotNamed) {
+  // 24 sigma that changes the residual by a tenth of a noise sigma: the summary must not say
+  // "below 5".
+  const QuestionOptions options;
+  const Candidate a = candidate("slip");
+  const std::vector<Fitted> singles = {fitted({&a}, -5.0, 24.0, 0.1)};
+  const Fitted final;
+  const RobotModel base;
+  QuestionResult result;
+  give_verdict({Question::kSensorToPose, &base, &singles, nullptr, &final}, options, result);
+  EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
+  EXPECT_NE(result.summary.find("slip at 24 sigma: an RMS change of 0.1 noise sigmas, below 0.5"),
             std::string::npos)
       << result.summary;
 }
