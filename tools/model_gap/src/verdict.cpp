@@ -39,7 +39,8 @@ std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& optio
     const std::string because = not_significant_because(*best, options);
     why = "most significant candidate " + best->effects[0]->name + " at " + fmt(best->z[0], 2) +
           " sigma: " +
-          (because.empty() ? "not selected, as it did not lower the BIC over the whole run"
+          (because.empty() ? "not selected (screened out on the run's first stretch, or no lower "
+                             "BIC than the model's)"
                            : because);
   }
   return "No significant gap (" + title + "): the model agrees with the run to within its noise (" +

@@ -275,8 +275,10 @@ std::vector<std::string> truth_nuisance_lines(const GapResult& r) {
       out.push_back("tracked body's origin, robot y: " + plus_minus(v[i], sigma(i), 1e3, 1) +
                     " mm");
     } else if (n == "truth.time_offset_s") {
-      out.push_back("motion capture's clock offset (late against the encoders): " +
-                    plus_minus(v[i], sigma(i), 1e3, 1) + " ms");
+      out.push_back(
+          "motion capture's clock offset (late against the encoders, at the run's "
+          "middle): " +
+          plus_minus(v[i], sigma(i), 1e3, 1) + " ms");
     } else if (n == "truth.clock_rate") {
       out.push_back("motion capture's clock rate against the encoders' (the offset's growth): " +
                     plus_minus(v[i], sigma(i), 1e3, 2) + " ms/s");
@@ -309,9 +311,14 @@ void record_run(const RunData& run, const SensorReplay& sensors, GapResult& resu
   }
   if (sensors.fits_time_offset()) {
     result.notes.emplace_back(
-        "The run does not declare a shared clock for motion capture (`# truth_clock: shared`): "
-        "the motion capture's time offset is fitted, and sensor_latency, which this question "
-        "cannot tell from it, is not a candidate.");
+        std::string("The run does not declare a shared clock for motion capture (`# "
+                    "truth_clock: shared`): the motion capture's time offset") +
+        (sensors.fits_clock_rate()
+             ? " and clock rate are fitted (a rate too: the log does not declare `# "
+               "truth_clock: same_rate`; a common wheel-radius scale is then fixed only by the "
+               "run's changes of speed)"
+             : " is fitted") +
+        ", and sensor_latency, which this question cannot tell from it, is not a candidate.");
   }
   const std::size_t w = sensors.windows().size();
   if (w < 10) {
