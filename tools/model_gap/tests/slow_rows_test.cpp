@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: Apache-2.0
+// 20 Hz rows and a 0.1 s sensor latency, on runs of the second robot generator (its own
+// physics, sensors and motion capture): the sensor question names the latency within 5 % and
+// the windows' gap shrinks at least threefold.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <string>
+
+#include "swivel/model_gap/run_log_adapter.hpp"
+#include "swivel/model_gap/workflow.hpp"
+#include "swivel/robot_model_io.hpp"
+#include "swivel/run_log.hpp"
+#include "swivel/second/second_robot.hpp"
+
+namespace swivel::model_gap {
+namespace {
+
+GapResult analyse_latency_run(std::uint64_t seed) {
+  second::RunSpec spec;
+  spec.design = "mid_diff";
+  spec.script = second::Script::kMixed;
+  spec.row_rate_hz = 20.0;
+  spec.duration_s = 90.0;
+  spec.seed = seed;
+  second::set_truth(spec, "sensor_latency.delay_s=0.1");
+  const second::GeneratedRun generated = second::generate(spec);
+  std::istringstream in(generated.run_csv);
+  const RunData run = to_run_data(parse_run_log(in, "latency_20hz.csv"));
+  return analyse_gap(parse_robot_model(generated.nominal_model_yaml, "mid_diff.yaml"), run);
+}
+
+TEST(SlowRows, A20HzRunNamesA100MillisecondLatencyWithinFivePercent) {
+  for (const std::uint64_t seed : {1U, 2U, 3U}) {
+    const GapResult r = analyse_latency_run(seed);
+    ASSERT_EQ(r.sensor.verdict, Verdict::kNamed) << "seed " << seed << ": " << r.sensor.summary;
+    ASSERT_EQ(r.sensor.named.size(), 1U) << r.sensor.summary;
+    const FittedEffect& latency = r.sensor.named[0];
+    ASSERT_EQ(latency.name, "sensor_latency") << r.sensor.summary;
+    EXPECT_NEAR(latency.values.at(0), 0.1, 0.005) << "seed " << seed;
+    // Every channel's gap over the windows shrinks at least threefold.
+    for (const ChannelGap& c : r.sensor.channels) {
+      ASSERT_GT(c.rms_after, 0.0) << c.info.name;
+      EXPECT_GE(c.rms_before / c.rms_after, 3.0) << "seed " << seed << " " << c.info.name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace swivel::model_gap
