@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "fake_plugins.hpp"
 
@@ -23,11 +25,17 @@ constexpr double kPeriodS = 0.001;
 class FailingHardware final : public Hardware {
  public:
   bool fail_write = false;
+  bool throw_on_write = false;
   int on_errors = 0;
+  std::string last_cause;
   void configure(const PluginContext& /*ctx*/) override {}
-  void on_error(const char* /*cause*/) override { ++on_errors; }
+  void on_error(const char* cause) override {
+    ++on_errors;
+    last_cause = cause;
+  }
   Status read(double /*stamp_s*/, HardwareState& /*out*/) override { return Status::kOk; }
   Status write(const ActuatorCommand& /*command*/) override {
+    if (throw_on_write) throw std::runtime_error("bus frame 7 lost: CRC mismatch");
     return fail_write ? Status::kError : Status::kOk;
   }
   [[nodiscard]] const char* last_error() const noexcept override { return "bus write failed"; }
@@ -153,6 +161,20 @@ TEST(WriteStage, AFailedWriteIsReportedToTheHardwareOnceUntilAClear) {
   EXPECT_EQ(rig.hardware.on_errors, 2);
   rig.stage.report_hardware_failure(nullptr, 1.0, rig.hardware, rig.guard, rig.events);
   EXPECT_EQ(rig.hardware.on_errors, 2);
+}
+
+// What a plugin threw lives in the guard's buffer, which the guarded on_error() call reuses:
+// the hardware must still be told the whole cause, and the log must carry it.
+TEST(WriteStage, AThrownWriteReachesOnErrorWhole) {
+  Rig rig;
+  rig.hardware.throw_on_write = true;
+  (void)rig.write(moving_at(rig.reading, 0.0));
+  ASSERT_NE(rig.failure, nullptr);
+  const std::string expected = "plugin threw std::runtime_error: bus frame 7 lost: CRC mismatch";
+  EXPECT_EQ(std::string(rig.failure), expected);
+  rig.stage.report_hardware_failure(rig.failure, 1.0, rig.hardware, rig.guard, rig.events);
+  EXPECT_EQ(rig.hardware.on_errors, 1);
+  EXPECT_EQ(rig.hardware.last_cause, expected);
 }
 
 }  // namespace

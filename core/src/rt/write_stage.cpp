@@ -57,15 +57,16 @@ void WriteStage::report_hardware_failure(const char* failure, double now_s, Hard
                                          PluginGuard& guard, LoopEvents& events) noexcept {
   if (failure == nullptr || hardware_in_error_) return;
   hardware_in_error_ = true;
+  copy_text(failure, failure_text_);
   const char* thrown = nullptr;
   (void)guard(
       [&] {
-        hardware.on_error(failure);
+        hardware.on_error(failure_text_.data());
         return Status::kOk;
       },
       thrown);
   events.log(LogLevel::kWarn, LogCode::kMessage, now_s, "hardware error state: on_error() called",
-             0.0, 0.0, 0.0, 0.0, failure);
+             0.0, 0.0, 0.0, 0.0, failure_text_.data());
 }
 
 }  // namespace swivel::rt

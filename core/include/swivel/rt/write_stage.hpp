@@ -11,6 +11,7 @@
 // Loop thread only. Real-time safe: no allocation, no lock, no I/O; noexcept (plugins are
 // called through the PluginGuard).
 
+#include <array>
 #include <cstdint>
 
 #include "swivel/plugin/drivetrain.hpp"
@@ -47,7 +48,8 @@ class WriteStage {
                const char*& hardware_failure) noexcept;
 
   /// At the cycle's end: on_error() once for a hardware failure of this cycle (`failure`,
-  /// null when none), until clear_hardware_error().
+  /// null when none), until clear_hardware_error(). `failure` may point into the guard's
+  /// buffer (what a plugin threw): it is copied before the guarded on_error() call reuses it.
   void report_hardware_failure(const char* failure, double now_s, Hardware& hardware,
                                PluginGuard& guard, LoopEvents& events) noexcept;
 
@@ -71,6 +73,7 @@ class WriteStage {
   ActuatorCommand setpoints_{};
   bool last_write_zero_ = true;
   bool hardware_in_error_ = false;
+  std::array<char, sizeof(FaultDetail)> failure_text_{};  // the failure on_error() is given
 };
 
 }  // namespace swivel::rt
