@@ -38,6 +38,7 @@ one of its headers) must be clean.
 import fcntl
 import hashlib
 import os
+import re
 import shlex
 import subprocess
 import sys
@@ -78,12 +79,20 @@ class Keys:
         with open(path, "rb") as f:
             return f.read()
 
+    def _generated_portable(self, text):
+        # Generated files name the folders they were generated in, also as include guards
+        # (idlc: /a/build/x.h -> DDSC__A_BUILD_X_H), and the version header carries the
+        # checkout's `git describe` (another commit, or -dirty), which no finding depends on.
+        text = self._portable(text)
+        for folder, mark in ((self.build, "<BUILD>"), (self.repo, "<REPO>")):
+            text = text.replace(re.sub(r"[^A-Za-z0-9]", "_", folder).upper(), mark)
+        return re.sub(r'(kGitDescribe = )"[^"]*"', r'\1"<describe>"', text)
+
     def _content_hash(self, path):
         if path not in self.content:
             data = self._read(path)
             if path.startswith(os.path.join(self.build, "")):
-                # Generated files name the folders they were generated in.
-                data = self._portable(data.decode("utf-8", "replace")).encode()
+                data = self._generated_portable(data.decode("utf-8", "replace")).encode()
             self.content[path] = hashlib.sha256(data).hexdigest()
         return self.content[path]
 
