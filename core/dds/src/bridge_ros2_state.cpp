@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <string>
 
 #include "bridge_entities.hpp"
 #include "ros2_interfaces.h"
@@ -34,15 +35,26 @@ double quaternion_to_yaw(double x, double y, double z, double w) noexcept {
   return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
+namespace {
+
+// Odometry and the transform share their header and frames: odom -> base at the stamp.
+template <class Stamped>
+void stamp_odom_to_base(Stamped& m, const rt::RosTime& stamp, const std::string& odom_frame,
+                        const std::string& base_frame) noexcept {
+  m.header.stamp.sec = stamp.sec;
+  m.header.stamp.nanosec = stamp.nanosec;
+  m.header.frame_id = c_str(odom_frame);
+  m.child_frame_id = c_str(base_frame);
+}
+
+}  // namespace
+
 void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
   // ROS time of the same instant as stamp_s, mapped by the loop (rt::ClockOffset).
   const rt::RosTime ros_stamp = rt::to_ros_time(s.ros_stamp_ns);
   if (dds_->odom_writer != 0) {
     nav_msgs_msg_dds__Odometry_ odom{};
-    odom.header.stamp.sec = ros_stamp.sec;
-    odom.header.stamp.nanosec = ros_stamp.nanosec;
-    odom.header.frame_id = c_str(odom_frame_);
-    odom.child_frame_id = c_str(base_frame_);
+    stamp_odom_to_base(odom, ros_stamp, odom_frame_, base_frame_);
     odom.pose.pose.position.x = s.estimate.pose.x_m;
     odom.pose.pose.position.y = s.estimate.pose.y_m;
     auto& q = odom.pose.pose.orientation;
@@ -59,10 +71,7 @@ void DdsBridge::publish_ros2_state(const StateSnapshot& s) {
 
   if (dds_->tf_writer != 0) {
     geometry_msgs_msg_dds__TransformStamped_ transform{};
-    transform.header.stamp.sec = ros_stamp.sec;
-    transform.header.stamp.nanosec = ros_stamp.nanosec;
-    transform.header.frame_id = c_str(odom_frame_);
-    transform.child_frame_id = c_str(base_frame_);
+    stamp_odom_to_base(transform, ros_stamp, odom_frame_, base_frame_);
     transform.transform.translation.x = s.estimate.pose.x_m;
     transform.transform.translation.y = s.estimate.pose.y_m;
     auto& q = transform.transform.rotation;

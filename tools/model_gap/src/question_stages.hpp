@@ -144,9 +144,13 @@ Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<
 /// Whether every effect of a fit is significant, large enough to matter, and further from
 /// the model's own values than the replay can resolve.
 bool significant(const Fitted& f, const QuestionOptions& options);
-/// Why a fit is not significant (significant()'s first failed condition, in words: "below 5
-/// sigma", "an RMS change of 0.2 noise sigmas, below 0.5", ...); empty when it is.
-std::string not_significant_because(const Fitted& f, const QuestionOptions& options);
+/// The first of significant()'s conditions a fit fails, and for which of its effects.
+struct Shortfall {
+  enum class Kind { kNone, kFitFailed, kBelowSignificance, kTooSmall, kUnresolved };
+  Kind kind = Kind::kNone;
+  std::size_t effect = 0;
+};
+Shortfall shortfall(const Fitted& f, const QuestionOptions& options);
 /// The single effect to select: the best (by BIC) of those fitted on every window that is
 /// significant and better than the nominal model (`nominal_bic`); none: nullptr.
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,

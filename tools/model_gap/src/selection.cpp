@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <sstream>
 
 #include "question_stages.hpp"
 
@@ -33,33 +32,18 @@ bool resolved(const Fitted& f, std::size_t e, const QuestionOptions& options) {
 
 }  // namespace
 
-bool significant(const Fitted& f, const QuestionOptions& options) {
-  if (!f.fit.ok) return false;
+Shortfall shortfall(const Fitted& f, const QuestionOptions& options) {
+  if (!f.fit.ok) return {Shortfall::Kind::kFitFailed, 0};
   for (std::size_t e = 0; e < f.z.size(); ++e) {
-    if (f.z[e] < options.min_z_name || f.size[e] < options.min_effect_size ||
-        !resolved(f, e, options))
-      return false;
+    if (f.z[e] < options.min_z_name) return {Shortfall::Kind::kBelowSignificance, e};
+    if (f.size[e] < options.min_effect_size) return {Shortfall::Kind::kTooSmall, e};
+    if (!resolved(f, e, options)) return {Shortfall::Kind::kUnresolved, e};
   }
-  return true;
+  return {};
 }
 
-std::string not_significant_because(const Fitted& f, const QuestionOptions& options) {
-  const auto fmt = [](double v) {
-    std::ostringstream s;
-    s.precision(2);
-    s << v;
-    return s.str();
-  };
-  if (!f.fit.ok) return "its fit failed";
-  for (std::size_t e = 0; e < f.z.size(); ++e) {
-    if (f.z[e] < options.min_z_name) return "below " + fmt(options.min_z_name) + " sigma";
-    if (f.size[e] < options.min_effect_size) {
-      return "an RMS change of " + fmt(f.size[e]) + " noise sigmas, below " +
-             fmt(options.min_effect_size);
-    }
-    if (!resolved(f, e, options)) return "within what the replay resolves";
-  }
-  return "";
+bool significant(const Fitted& f, const QuestionOptions& options) {
+  return shortfall(f, options).kind == Shortfall::Kind::kNone;
 }
 
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,

@@ -27,6 +27,25 @@ std::string unexplained_summary(const VerdictInputs& in, const MisfitTest& m,
          ".";
 }
 
+// Why a fit was not named, in words: significant()'s first failed condition ("below 5 sigma",
+// "an RMS change of 0.2 noise sigmas, below 0.5", ...), or why a significant one was not
+// selected.
+std::string not_named_because(const Fitted& f, const QuestionOptions& options) {
+  const Shortfall s = shortfall(f, options);
+  switch (s.kind) {
+    case Shortfall::Kind::kFitFailed: return "its fit failed";
+    case Shortfall::Kind::kBelowSignificance:
+      return "below " + fmt(options.min_z_name, 2) + " sigma";
+    case Shortfall::Kind::kTooSmall:
+      return "an RMS change of " + fmt(f.size[s.effect], 2) + " noise sigmas, below " +
+             fmt(options.min_effect_size, 2);
+    case Shortfall::Kind::kUnresolved: return "within what the replay resolves";
+    case Shortfall::Kind::kNone: break;
+  }
+  return "not selected (screened out on the run's first stretch, or no lower BIC than the "
+         "model's)";
+}
+
 std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& options,
                            const std::string& title) {
   const Fitted* best = nullptr;
@@ -36,12 +55,8 @@ std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& optio
   }
   std::string why = "no candidate could be fitted";
   if (best != nullptr) {
-    const std::string because = not_significant_because(*best, options);
     why = "most significant candidate " + best->effects[0]->name + " at " + fmt(best->z[0], 2) +
-          " sigma: " +
-          (because.empty() ? "not selected (screened out on the run's first stretch, or no lower "
-                             "BIC than the model's)"
-                           : because);
+          " sigma: " + not_named_because(*best, options);
   }
   return "No significant gap (" + title + "): the model agrees with the run to within its noise (" +
          why + ").";

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace swivel::model_gap::detail {
@@ -148,16 +149,23 @@ TEST(QuestionVerdict, UnexplainedWhenAMisfitCountsWhateverWasSelected) {
   EXPECT_NE(result.summary.find("candidate a (named nothing"), std::string::npos) << result.summary;
 }
 
-TEST(QuestionVerdict, NoSignificantGapNamesTheMostSignificantSingle) {
+// The verdict when nothing was selected, with `misfits` left by the nominal model.
+QuestionResult verdict_without_selection(const std::vector<Fitted>& singles,
+                                         std::vector<MisfitTest> misfits = {}) {
   const QuestionOptions options;
-  const Candidate a = candidate("a");
-  const Candidate b = candidate("b");
-  const std::vector<Fitted> singles = {fitted({&a}, -5.0, 2.5, 0.2), fitted({&b}, -3.0, 3.5, 0.1)};
   const Fitted final;
   const RobotModel base;
   QuestionResult result;
-  result.misfits = {misfit("heading", 3.0, 2.5)};
+  result.misfits = std::move(misfits);
   give_verdict({Question::kSensorToPose, &base, &singles, nullptr, &final}, options, result);
+  return result;
+}
+
+TEST(QuestionVerdict, NoSignificantGapNamesTheMostSignificantSingle) {
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  const std::vector<Fitted> singles = {fitted({&a}, -5.0, 2.5, 0.2), fitted({&b}, -3.0, 3.5, 0.1)};
+  const QuestionResult result = verdict_without_selection(singles, {misfit("heading", 3.0, 2.5)});
   EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
   EXPECT_NE(result.summary.find("most significant candidate b at 3.5 sigma: below 5 sigma"),
             std::string::npos)
@@ -167,13 +175,8 @@ TEST(QuestionVerdict, NoSignificantGapNamesTheMostSignificantSingle) {
 TEST(QuestionVerdict, NoSignificantGapSaysWhyAStrongCandidateWasNotNamed) {
   // 24 sigma that changes the residual by a tenth of a noise sigma: the summary must not say
   // "below 5".
-  const QuestionOptions options;
   const Candidate a = candidate("slip");
-  const std::vector<Fitted> singles = {fitted({&a}, -5.0, 24.0, 0.1)};
-  const Fitted final;
-  const RobotModel base;
-  QuestionResult result;
-  give_verdict({Question::kSensorToPose, &base, &singles, nullptr, &final}, options, result);
+  const QuestionResult result = verdict_without_selection({fitted({&a}, -5.0, 24.0, 0.1)});
   EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
   EXPECT_NE(result.summary.find("slip at 24 sigma: an RMS change of 0.1 noise sigmas, below 0.5"),
             std::string::npos)
