@@ -32,18 +32,22 @@ int run_gap(const GapCommandOptions& o) {
     if (q == &result.command && !result.command_assessed) continue;
     std::cout << model_gap::question_title(q->question) << ": "
               << model_gap::verdict_name(q->verdict) << "\n  " << q->summary << "\n";
-    for (const auto& e : q->named) {
-      const bool partial = e.observable_combinations < e.keys.size();
-      for (std::size_t i = 0; i < e.keys.size(); ++i) {
-        std::cout << "    " << (e.limits ? "limits." : e.name + ".") << e.keys[i] << " = "
-                  << std::setprecision(6) << e.values[i] << " +- " << std::setprecision(2)
-                  << (partial ? e.partial_sigmas[i] : e.sigmas[i]) << "\n";
-      }
-      if (partial) {
-        std::cout
-            << "    (the run fixes " << e.observable_combinations << " of " << e.keys.size()
-            << " combinations of these; the rest stay at the model's values, and each +- is of"
-               " what the run fixes)\n";
+    for (const auto* effects : {&q->named, &q->calibrated}) {
+      if (effects == &q->calibrated && !effects->empty())
+        std::cout << "    calibrated (parameters of the robot's own model, not missing effects):\n";
+      for (const auto& e : *effects) {
+        const bool partial = e.observable_combinations < e.keys.size();
+        for (std::size_t i = 0; i < e.keys.size(); ++i) {
+          std::cout << "    " << (e.limits ? "limits." : e.name + ".") << e.keys[i] << " = "
+                    << std::setprecision(6) << e.values[i] << " +- " << std::setprecision(2)
+                    << (partial ? e.partial_sigmas[i] : e.sigmas[i]) << "\n";
+        }
+        if (partial) {
+          std::cout
+              << "    (the run fixes " << e.observable_combinations << " of " << e.keys.size()
+              << " combinations of these; the rest stay at the model's values, and each +- is of"
+                 " what the run fixes)\n";
+        }
       }
     }
   }

@@ -40,6 +40,10 @@ int run_gap_cross(const GapCrossOptions& o) {
       for (std::size_t i = 0; i < e.keys.size(); ++i)
         std::cout << "  " << e.name << "." << e.keys[i] << " = " << e.values[i];
     }
+    for (const model_gap::FittedEffect& e : f.calibrated) {
+      for (std::size_t i = 0; i < e.keys.size(); ++i)
+        std::cout << "  calibrated " << e.name << "." << e.keys[i] << " = " << e.values[i];
+    }
     std::cout << "\n";
   }
   for (const model_gap::ParameterAgreement& a : r.agreement) {
@@ -52,12 +56,12 @@ int run_gap_cross(const GapCrossOptions& o) {
   std::cout << "median ratio of the held-out RMS position gap (fitted / nominal) over " << r.pairs
             << " pairs within sessions: " << std::setprecision(3) << r.median_ratio << "\n"
             << "  over the " << r.pairs_named
-            << " pairs whose fit run named something: " << r.median_ratio_named << " ("
-            << 1000.0 * r.median_nominal_rms_m << " mm -> " << 1000.0 * r.median_fitted_rms_m
-            << " mm, medians)\n"
-            << "sensor verdicts: " << r.named << " named, " << r.no_gap << " no significant gap, "
-            << r.unexplained << " unexplained, of " << r.fits.size()
-            << "; runs not used: " << r.skipped.size() << "\n"
+            << " pairs whose fit run named or calibrated something: " << r.median_ratio_named
+            << " (" << 1000.0 * r.median_nominal_rms_m << " mm -> "
+            << 1000.0 * r.median_fitted_rms_m << " mm, medians)\n"
+            << "sensor verdicts: " << r.named << " named, " << r.no_gap << " no significant gap ("
+            << r.calibrated << " of them calibrated), " << r.unexplained << " unexplained, of "
+            << r.fits.size() << "; runs not used: " << r.skipped.size() << "\n"
             << "report: " << o.out_dir << "/cross_run.md\n";
   return 0;
 }

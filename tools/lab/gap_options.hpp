@@ -23,6 +23,11 @@ inline void add_shared_gap_options(CLI::App* cmd, std::string& model_file, std::
                   "significance (normal deviates) an effect needs to be named")
       ->capture_default_str()
       ->check(CLI::Range(2.0, 20.0));
+  cmd->add_option("--calibrate-sigma", gap.question.min_z_calibrate,
+                  "significance a parameter of the robot's own model needs to be calibrated "
+                  "when nothing is named")
+      ->capture_default_str()
+      ->check(CLI::Range(2.0, 20.0));
 }
 
 }  // namespace swivel::lab

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "swivel/model_gap/fold_effects.hpp"
 #include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/sim/effects.hpp"
 
@@ -40,7 +41,9 @@ std::pair<double, double> weighted_mean(const std::vector<double>& v, const std:
 std::vector<ParameterAgreement> agreement_of(const std::vector<FitRun>& fits) {
   std::map<std::string, ParameterAgreement> by_name;
   for (const FitRun& f : fits) {
-    for (const FittedEffect& e : f.named) {
+    std::vector<FittedEffect> effects = f.named;
+    effects.insert(effects.end(), f.calibrated.begin(), f.calibrated.end());
+    for (const FittedEffect& e : effects) {
       for (std::size_t i = 0; i < e.keys.size(); ++i) {
         // What the run fixes of a parameter it cannot fix alone.
         const double sigma = std::isfinite(e.sigmas[i]) ? e.sigmas[i] : e.partial_sigmas[i];
@@ -84,6 +87,24 @@ std::string fmt(double v, int precision = 4) {
   s.precision(precision);
   s << v;
   return s.str();
+}
+
+// The nominal model with every parameter two or more runs agree on at its weighted mean.
+void pool(const RobotModel& nominal, CrossRunResult& r) {
+  r.pooled = nominal;
+  for (const ParameterAgreement& a : r.agreement) {
+    const std::size_t dot = a.name.find('.');
+    const std::string effect = a.name.substr(0, dot);
+    if (a.values.size() < 2 || effect == "limits") {
+      r.pooled_left_out.push_back(a.name + ": " + std::to_string(a.values.size()) +
+                                  (a.values.size() == 1 ? " run" : " runs"));
+      continue;
+    }
+    r.pooled.effects[effect][a.name.substr(dot + 1)] = a.weighted_mean;
+    r.pooled_from.push_back(a.name + " = " + fmt(a.weighted_mean, 6) + " +- " +
+                            fmt(a.sigma_of_mean, 2) + " (" + std::to_string(a.values.size()) +
+                            " runs)");
+  }
 }
 
 }  // namespace
@@ -146,22 +167,25 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     f.verdict = fitted.sensor.verdict;
     f.summary = fitted.sensor.summary;
     f.named = fitted.sensor.named;
+    f.calibrated = fitted.sensor.calibrated;
     f.truth = truth_nuisance_lines(fitted);
-    f.fitted = fitted.sensor.verdict == Verdict::kNamed ? fitted.sensor.augmented : nominal;
+    f.fitted = fitted.sensor.verdict != Verdict::kUnexplained ? fitted.sensor.augmented : nominal;
+    const bool changed = !f.named.empty() || !f.calibrated.empty();
     if (f.verdict == Verdict::kUnexplained) ++result.unexplained;
     if (f.verdict == Verdict::kNamed) ++result.named;
     if (f.verdict == Verdict::kNoSignificantGap) ++result.no_gap;
+    if (!f.calibrated.empty()) ++result.calibrated;
     for (std::size_t j = 0; j < n; ++j) {
       if (j == i || usable[j] == 0 || session(j) != session(i)) continue;
-      // A run that named nothing predicts the others exactly as the nominal model does.
-      const double gap = f.named.empty() ? nominal_gap[j]
-                                         : held_out_gap(f.fitted, runs[j], options).rms_position_m;
+      // A run that changed nothing predicts the others exactly as the nominal model does.
+      const double gap =
+          changed ? held_out_gap(f.fitted, runs[j], options).rms_position_m : nominal_gap[j];
       f.others.push_back(runs[j].source);
       f.nominal_rms_m.push_back(nominal_gap[j]);
       f.fitted_rms_m.push_back(gap);
       f.ratio.push_back(gap / nominal_gap[j]);
       ratios.push_back(f.ratio.back());
-      if (!f.named.empty()) {
+      if (changed) {
         ratios_named.push_back(f.ratio.back());
         nominal_named.push_back(nominal_gap[j]);
         fitted_named.push_back(gap);
@@ -177,21 +201,39 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
   result.median_nominal_rms_m = median(nominal_named);
   result.median_fitted_rms_m = median(fitted_named);
   result.agreement = agreement_of(result.fits);
+  pool(nominal, result);
   return result;
 }
 
 namespace {
 
-nlohmann::json fit_run_json(const FitRun& f) {
+nlohmann::json effects_json(const std::vector<FittedEffect>& effects) {
   using nlohmann::json;
-  json named = json::array();
-  for (const FittedEffect& e : f.named) {
+  json out = json::array();
+  for (const FittedEffect& e : effects) {
     for (std::size_t i = 0; i < e.keys.size(); ++i) {
-      named.push_back({{"parameter", e.name + "." + e.keys[i]},
-                       {"value", e.values[i]},
-                       {"sigma", std::isfinite(e.sigmas[i]) ? json(e.sigmas[i]) : json(nullptr)}});
+      out.push_back({{"parameter", e.name + "." + e.keys[i]},
+                     {"value", e.values[i]},
+                     {"sigma", std::isfinite(e.sigmas[i]) ? json(e.sigmas[i]) : json(nullptr)}});
     }
   }
+  return out;
+}
+
+// "effect.key = value +- sigma, ..." ("*": not observable alone).
+std::string effects_text(const std::vector<FittedEffect>& effects) {
+  std::string text;
+  for (const FittedEffect& e : effects) {
+    for (std::size_t i = 0; i < e.keys.size(); ++i) {
+      text += (text.empty() ? "" : ", ") + e.name + "." + e.keys[i] + " = " + fmt(e.values[i], 6) +
+              " +- " + (std::isfinite(e.sigmas[i]) ? fmt(e.sigmas[i], 2) : std::string("*"));
+    }
+  }
+  return text;
+}
+
+nlohmann::json fit_run_json(const FitRun& f) {
+  using nlohmann::json;
   json others = json::array();
   for (std::size_t k = 0; k < f.others.size(); ++k) {
     others.push_back({{"run", f.others[k]},
@@ -201,7 +243,8 @@ nlohmann::json fit_run_json(const FitRun& f) {
   }
   return {{"run", f.run},
           {"verdict", verdict_name(f.verdict)},
-          {"named", named},
+          {"named", effects_json(f.named)},
+          {"calibrated", effects_json(f.calibrated)},
           {"motion_capture", f.truth},
           {"median_ratio", median(f.ratio)},
           {"others", others}};
@@ -220,6 +263,7 @@ nlohmann::json cross_run_json(const CrossRunResult& r, const RobotModel& nominal
   j["median_fitted_rms_position_m"] = r.median_fitted_rms_m;
   j["verdicts"] = {{"named", r.named},
                    {"no significant gap", r.no_gap},
+                   {"of which calibrated", r.calibrated},
                    {"unexplained residual", r.unexplained}};
   j["unexplained"] = r.unexplained;
   j["skipped"] = r.skipped;
@@ -240,37 +284,34 @@ nlohmann::json cross_run_json(const CrossRunResult& r, const RobotModel& nominal
                          {"within_2_sigma", a.within_2_sigma}});
   }
   j["agreement"] = agreement;
+  j["pooled"] = {{"from", r.pooled_from}, {"left_out", r.pooled_left_out}};
   return j;
 }
 
 void write_cross_run_markdown(const CrossRunResult& r, const RobotModel& nominal,
                               std::ostream& md) {
   md << "# Across runs: " << nominal.name << "\n\n"
-     << "Each run in turn is analysed (sensor to pose); what it names is replayed on every other "
+     << "Each run in turn is analysed (sensor to pose); what it names or calibrates is replayed on "
+        "every other "
         "run beside the nominal model, each run with its own motion-capture nuisances fitted. "
         "The ratio is the whole-run RMS position gap with the fitted model over the gap with the "
         "nominal one (below 1: the fitted model predicts a run it has not seen better).\n\n"
      << "Median ratio over " << r.pairs << " (fit run, other run of its session) pairs: **"
      << fmt(r.median_ratio, 3) << "**; over the " << r.pairs_named
-     << " pairs whose fit run named something: **" << fmt(r.median_ratio_named, 3)
+     << " pairs whose fit run named or calibrated something: **" << fmt(r.median_ratio_named, 3)
      << "** (RMS position gap " << fmt(1000.0 * r.median_nominal_rms_m, 3) << " mm nominal, "
      << fmt(1000.0 * r.median_fitted_rms_m, 3)
      << " mm fitted, medians). Sensor verdicts: " << r.named << " named, " << r.no_gap
-     << " no significant gap, " << r.unexplained << " unexplained, of " << r.fits.size() << ".\n\n"
-     << "| fitted on | verdict | named | median ratio on the others |\n|---|---|---|---|\n";
+     << " no significant gap (" << r.calibrated << " of them calibrated), " << r.unexplained
+     << " unexplained, of " << r.fits.size() << ".\n\n"
+     << "| fitted on | verdict | named | calibrated | median ratio on the others |\n"
+     << "|---|---|---|---|---|\n";
   for (const FitRun& f : r.fits) {
-    std::string named;
-    for (const FittedEffect& e : f.named) {
-      for (std::size_t i = 0; i < e.keys.size(); ++i) {
-        named += (named.empty() ? "" : ", ") + e.name + "." + e.keys[i] + " = " +
-                 fmt(e.values[i], 6) + " +- " +
-                 (std::isfinite(e.sigmas[i]) ? fmt(e.sigmas[i], 2) : std::string("*"));
-      }
-    }
-    md << "| " << f.run << " | " << verdict_name(f.verdict) << " | " << named << " | "
+    md << "| " << f.run << " | " << verdict_name(f.verdict) << " | " << effects_text(f.named)
+       << " | " << effects_text(f.calibrated) << " | "
        << (f.ratio.empty() ? std::string("-") : fmt(median(f.ratio), 3)) << " |\n";
   }
-  md << "\n## Agreement of the named values\n\n"
+  md << "\n## Agreement of the named and calibrated values\n\n"
      << "| parameter | runs | weighted mean | sigma of mean | chi^2 / dof | within 1 / 2 sigma "
         "of the others |\n|---|---|---|---|---|---|\n";
   for (const ParameterAgreement& a : r.agreement) {
@@ -279,6 +320,12 @@ void write_cross_run_markdown(const CrossRunResult& r, const RobotModel& nominal
        << fmt(100.0 * a.within_1_sigma, 3) << " % / " << fmt(100.0 * a.within_2_sigma, 3)
        << " % |\n";
   }
+  md << "\n## The model fitted on all the runs: `model_pooled.yaml`\n\n"
+     << "Every parameter two or more runs named or calibrated, at its weighted mean (one run's "
+        "value has nothing to agree with); judge it on runs it was not fitted on with "
+        "`swivel-lab gap-judge`.\n\n";
+  for (const std::string& line : r.pooled_from) md << "- " << line << "\n";
+  for (const std::string& line : r.pooled_left_out) md << "- left out: " << line << "\n";
   if (!r.skipped.empty()) {
     md << "\n## Runs not used\n\n";
     for (const std::string& s : r.skipped) md << "- " << s << "\n";
@@ -296,6 +343,11 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
   std::ofstream md(dir + "/cross_run.md");
   write_cross_run_markdown(r, nominal, md);
   if (!md) throw std::runtime_error("cannot write " + dir + "/cross_run.md");
+  write_folded_model(r.pooled,
+                     nominal.name + ", fitted on " + std::to_string(r.fits.size()) +
+                         " runs together (swivel-lab gap-cross: every parameter two or more runs "
+                         "named or calibrated, at its weighted mean)",
+                     dir + "/model_pooled.yaml");
 }
 
 }  // namespace swivel::model_gap

@@ -3,10 +3,13 @@
 
 #include <charconv>
 #include <cstddef>
+#include <fstream>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "swivel/robot_model_io.hpp"
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
@@ -150,6 +153,13 @@ void apply_changes(const std::string& name, const EffectParams& params,
 
 }  // namespace
 
+bool folds_into_robot_model(const std::string& name, DrivetrainKind kind) {
+  RobotModel scratch;
+  scratch.drivetrain = kind;
+  std::vector<Change> changes;
+  return collect_changes(name, {}, scratch, changes);
+}
+
 FoldResult fold_effects(const RobotModel& model) {
   sim::validate_effects(model);
   FoldResult result;
@@ -169,6 +179,19 @@ FoldResult fold_effects(const RobotModel& model) {
     result.model.effects[name] = params;
   }
   return result;
+}
+
+void write_folded_model(const RobotModel& model, const std::string& title,
+                        const std::string& path) {
+  const FoldResult fold = fold_effects(model);
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << "# " << title << "\n";
+  if (fold.folded.empty() && fold.kept.empty()) out << "# nothing named: the nominal model\n";
+  for (const std::string& line : fold.folded) out << "# folded: " << line << "\n";
+  for (const std::string& line : fold.kept) out << "# kept in effects (" << line << ")\n";
+  out << robot_model_to_yaml(fold.model);
+  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace swivel::model_gap

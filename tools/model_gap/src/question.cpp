@@ -332,7 +332,10 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   result.candidates = detail::candidate_scores(s);
   detail::measure_misfit(s, result);
   result.noise_findings = detail::stated_noise_findings(s.replay, s.noise, options.min_noise_ratio);
-  detail::give_verdict({question, &base, &s.singles, s.chosen, &s.final}, options, result);
+  const detail::VerdictInputs verdict{question, &base,   &s.singles,         s.chosen,
+                                      &s.final, &s.full, s.nominal_fixed.bic};
+  detail::give_verdict(verdict, options, result);
+  detail::calibrate_own_parameters(verdict, options, result);
   if (!result.noise_findings.empty()) {
     const NoiseFinding& f = result.noise_findings.front();
     std::ostringstream line;

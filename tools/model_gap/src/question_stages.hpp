@@ -7,7 +7,8 @@
 //   refit        the selection again with the noise it leaves and its nuisance free;
 //   misfit       what remains, and the tests for what the library does not hold;
 //   noise        the noise the fit took against what the model's sensor figures state;
-//   verdict      no significant gap, named, or unexplained residual, and its summary.
+//   verdict      no significant gap, named, or unexplained residual, and its summary;
+//   calibrate    with nothing named, the robot model's own parameters the run fixes.
 // What the stages share is QuestionState, passed from one to the next. Internal to the
 // model-gap library: the public interface is question.hpp.
 
@@ -178,13 +179,30 @@ struct VerdictInputs {
   Question question = Question::kSensorToPose;
   const RobotModel* base = nullptr;
   const std::vector<Fitted>* singles = nullptr;
-  const Fitted* chosen = nullptr;  ///< none: nothing selected
-  const Fitted* final = nullptr;   ///< the selection refitted
+  const Fitted* chosen = nullptr;           ///< none: nothing selected
+  const Fitted* final = nullptr;            ///< the selection refitted
+  const std::vector<char>* full = nullptr;  ///< per single: fitted on every window (none: all)
+  double nominal_bic = kInf;                ///< the nominal model's, every window
 };
+
+/// Effect e of a fit, its parameters from `first` on (`s`: the fit's score), as reported.
+FittedEffect fitted_effect(const Fitted& fit, const CandidateScore& s, std::size_t e,
+                           std::size_t first);
 
 /// Sets result.verdict and result.summary from result.misfits and the selection, and when
 /// named, result.named and result.augmented.
 void give_verdict(const VerdictInputs& in, const QuestionOptions& options, QuestionResult& result);
+
+// --- Calibration (calibrate.cpp) ---
+
+/// The single to calibrate with (QuestionOptions::calibrate): the best by BIC of the singles
+/// fitted on every window whose effect has a parameter in the robot model, significant at
+/// min_z_calibrate and resolved, and better than the nominal model; none: nullptr.
+const Fitted* choose_calibration(const VerdictInputs& in, const QuestionOptions& options);
+/// When the verdict is "no significant gap" and options.calibrate: result.calibrated,
+/// result.augmented and a sentence in result.summary from choose_calibration().
+void calibrate_own_parameters(const VerdictInputs& in, const QuestionOptions& options,
+                              QuestionResult& result);
 
 // --- The stages (question.cpp) ---
 

@@ -47,6 +47,7 @@ json question_json(const QuestionResult& q) {
   j["verdict"] = verdict_name(q.verdict);
   j["summary"] = q.summary;
   j["named_effects"] = effects_json(q.named, q.question);
+  j["calibrated_effects"] = effects_json(q.calibrated, q.question);
   json cands = json::array();
   for (const auto& c : q.candidates) {
     json params = json::object();
@@ -114,6 +115,7 @@ json report_json(const GapResult& r) {
   for (const auto& e : effects_json(r.command.named, Question::kCommandToMotion))
     named.push_back(e);
   j["named_effects"] = named;
+  j["calibrated_effects"] = effects_json(r.sensor.calibrated, Question::kSensorToPose);
   {
     const FoldResult fold = fold_effects(r.augmented);
     j["model_augmented"] = {{"folded", fold.folded}, {"kept_in_effects", fold.kept}};
@@ -257,33 +259,44 @@ bool run_gnuplot(const std::string& dir) {
   return std::system(cmd.c_str()) == 0;  // NOLINT(cert-env33-c)
 }
 
+// The fitted effects' parameters as a table, with a note when some are not observable alone.
+void effects_markdown(std::ostringstream& md, const std::vector<FittedEffect>& effects) {
+  if (effects.empty()) return;
+  md << "| effect | parameter | value | 1 sigma | significance |\n|---|---|---|---|---|\n";
+  bool partial = false;
+  for (const auto& e : effects) {
+    for (std::size_t i = 0; i < e.keys.size(); ++i) {
+      const bool alone = std::isfinite(e.sigmas[i]);
+      partial = partial || !alone;
+      md << "| " << e.name << " | " << (e.limits ? "limits." : "") << e.keys[i] << " | "
+         << fmt(e.values[i], 6) << " | "
+         << (alone ? fmt(e.sigmas[i], 2) : fmt(e.partial_sigmas[i], 2) + " *") << " | "
+         << fmt(e.z, 3) << " sigma |\n";
+    }
+  }
+  md << "\n";
+  if (partial) {
+    md << "\\* Not observable alone: the run fixes only some combinations of these parameters (";
+    for (const auto& e : effects) {
+      if (e.observable_combinations < e.keys.size()) {
+        md << e.name << ": " << e.observable_combinations << " of " << e.keys.size() << "; ";
+      }
+    }
+    md << "the rest stay at the model's values); the sigma is that of the part the run "
+          "fixes.\n\n";
+  }
+}
+
 void question_markdown(std::ostringstream& md, const QuestionResult& q, const QuestionOptions& o) {
   md << "## " << question_title(q.question) << ": " << verdict_name(q.verdict) << "\n\n"
      << q.summary << "\n\n";
-  if (!q.named.empty()) {
-    md << "| effect | parameter | value | 1 sigma | significance |\n|---|---|---|---|---|\n";
-    bool partial = false;
-    for (const auto& e : q.named) {
-      for (std::size_t i = 0; i < e.keys.size(); ++i) {
-        const bool alone = std::isfinite(e.sigmas[i]);
-        partial = partial || !alone;
-        md << "| " << e.name << " | " << (e.limits ? "limits." : "") << e.keys[i] << " | "
-           << fmt(e.values[i], 6) << " | "
-           << (alone ? fmt(e.sigmas[i], 2) : fmt(e.partial_sigmas[i], 2) + " *") << " | "
-           << fmt(e.z, 3) << " sigma |\n";
-      }
-    }
-    md << "\n";
-    if (partial) {
-      md << "\\* Not observable alone: the run fixes only some combinations of these parameters (";
-      for (const auto& e : q.named) {
-        if (e.observable_combinations < e.keys.size()) {
-          md << e.name << ": " << e.observable_combinations << " of " << e.keys.size() << "; ";
-        }
-      }
-      md << "the rest stay at the model's values); the sigma is that of the part the run "
-            "fixes.\n\n";
-    }
+  effects_markdown(md, q.named);
+  if (!q.calibrated.empty()) {
+    md << "Calibrated: a parameter of the robot's own model that the run fixes, significant at "
+       << fmt(o.min_z_calibrate, 2)
+       << " sigma or more though its change per window is too small to name a missing effect "
+          "(it adds up over the run); folded into `model_augmented.yaml`.\n\n";
+    effects_markdown(md, q.calibrated);
   }
   md << "| channel | unit | noise (1 sigma) | RMS before | RMS after | shrink | whitened RMS "
         "before -> after |\n"
@@ -341,11 +354,12 @@ std::string markdown(const GapResult& r, bool plots) {
      << " |\n"
      << "| command to motion | "
      << (r.command_assessed ? verdict_name(r.command.verdict) : "not assessed") << " |\n\n";
-  if (!r.named().empty()) {
+  if (!r.named().empty() || !r.sensor.calibrated.empty()) {
     // What the daemon loads (fold_effects.hpp): the header of model_augmented.yaml says it too.
     const FoldResult fold = fold_effects(r.augmented);
     md << "The augmented model is `model_augmented.yaml`: the nominal model with what was named "
-          "folded into the robot's own parameters, which the daemon's drivetrain and localization "
+          "(or calibrated) folded into the robot's own parameters, which the daemon's drivetrain "
+          "and localization "
           "use (fitted limits go to its `limits:` section); only what the daemon cannot use stays "
           "in `effects:`, for the simulator.\n\n";
     for (const std::string& line : fold.folded) md << "- folded: " << line << "\n";
@@ -413,16 +427,9 @@ void write_report(const GapResult& result, const std::string& dir) {
   {
     // The model for the robot: what has a parameter in the robot model is folded into it, so
     // that a reload changes what the daemon computes; the comment lines say what went where.
-    const FoldResult fold = fold_effects(result.augmented);
-    std::ofstream out(d / "model_augmented.yaml");
-    if (!out) throw std::runtime_error("cannot write " + (d / "model_augmented.yaml").string());
-    out << "# " << result.nominal.name << ", as swivel-lab gap found it in " << result.run_source
-        << "\n";
-    if (fold.folded.empty() && fold.kept.empty()) out << "# nothing named: the nominal model\n";
-    for (const std::string& line : fold.folded) out << "# folded: " << line << "\n";
-    for (const std::string& line : fold.kept) out << "# kept in effects (" << line << ")\n";
-    out << robot_model_to_yaml(fold.model);
-    if (!out) throw std::runtime_error("cannot write " + (d / "model_augmented.yaml").string());
+    write_folded_model(result.augmented,
+                       result.nominal.name + ", as swivel-lab gap found it in " + result.run_source,
+                       (d / "model_augmented.yaml").string());
   }
   write_paths(result, (d / "paths.dat").string());
   write_windows(result, (d / "windows.dat").string());

@@ -62,7 +62,8 @@ std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& optio
          why + ").";
 }
 
-// Effect e of the refitted selection, its parameters from `first` on (`s`: its score).
+}  // namespace
+
 FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::size_t e,
                            std::size_t first) {
   const Candidate& c = *final.effects[e];
@@ -72,6 +73,7 @@ FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::si
   fe.keys = c.keys;
   fe.z = e < final.z.size() ? final.z[e] : 0.0;
   fe.inverse = c.inverse;
+  fe.identity = c.identity;
   const std::size_t m = c.params.size();
   const std::size_t p = final.fit.values.size();
   fe.fit_covariance.assign(m * m, 0.0);
@@ -94,6 +96,8 @@ FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::si
   (void)mahalanobis_squared(zero, fe.fit_covariance, fe.observable_combinations);
   return fe;
 }
+
+namespace {
 
 void name_selection(const VerdictInputs& in, const std::string& title, QuestionResult& result) {
   const Fitted& final = *in.final;

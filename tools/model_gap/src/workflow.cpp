@@ -447,15 +447,19 @@ GapResult analyse_gap(const RobotModel& nominal, const RunData& run, const GapOp
   const MotionPeaks peaks = motion_peaks(run, robot_path);
   const std::vector<Candidate> sensor_library =
       sensor_candidates(nominal, run, sensors, peaks, result.notes);
+  // The motion capture fixes the robot's geometry: this question calibrates it when it names
+  // nothing (QuestionOptions::calibrate).
+  QuestionOptions sensor_options = options.question;
+  sensor_options.calibrate = true;
   result.sensor =
-      analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, options.question);
+      analyse_question(Question::kSensorToPose, nominal, sq, sensor_library, sensor_options);
   result.truth = sensors.truth(result.sensor.nuisance);
   result.truth_names.clear();
   for (const ParamSpec& p : sensors.nuisance()) result.truth_names.push_back(p.name);
-  // The command question starts from what the sensors showed, unless they showed something
-  // the library cannot name.
+  // The command question starts from what the sensors showed (named or calibrated), unless
+  // they showed something the library cannot name.
   const RobotModel command_base =
-      result.sensor.verdict == Verdict::kNamed ? result.sensor.augmented : nominal;
+      result.sensor.verdict != Verdict::kUnexplained ? result.sensor.augmented : nominal;
   sensors.path(sim::resolve_plant(nominal), result.truth, result.dead_reckoning_before);
   sensors.path(sim::resolve_plant(command_base), result.truth, result.dead_reckoning_after);
 

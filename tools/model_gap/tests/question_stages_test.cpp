@@ -252,5 +252,78 @@ TEST(QuestionNoise, NoiseBeyondTheStatedFiguresIsReported) {
   EXPECT_TRUE(stated_noise_findings(replay, noise, 6.0).empty());
 }
 
+// The calibration stage on a differential robot with nothing named: slip (no parameter of the
+// robot model) has the best BIC, track_width is below the naming significance and changes a
+// window by a third of the noise, gyro_bias is below the calibration's.
+struct CalibrationCase {
+  Candidate slip = candidate("slip");
+  Candidate track = candidate("track_width");
+  Candidate bias = candidate("gyro_bias");
+  std::vector<Fitted> singles = {fitted({&slip}, -20.0, 4.5, 0.1),
+                                 fitted({&track}, -7.0, 3.6, 0.35),
+                                 fitted({&bias}, -9.0, 2.5, 0.8)};
+  std::vector<char> full = {1, 1, 1};
+  RobotModel base;
+  Fitted final;
+
+  QuestionResult decide(bool calibrate, std::vector<MisfitTest> misfits = {}) {
+    track.keys = {"scale"};
+    singles[1].fit.values = {1.011};
+    QuestionOptions options;
+    options.calibrate = calibrate;
+    QuestionResult result;
+    result.augmented = base;
+    result.misfits = std::move(misfits);
+    const VerdictInputs in{Question::kSensorToPose, &base, &singles, nullptr, &final, &full, 0.0};
+    give_verdict(in, options, result);
+    calibrate_own_parameters(in, options, result);
+    return result;
+  }
+};
+
+TEST(QuestionCalibration, ARobotParameterTooSmallToNameIsCalibratedWhenSignificant) {
+  CalibrationCase c;
+  const QuestionResult result = c.decide(true);
+  EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
+  ASSERT_EQ(result.calibrated.size(), 1U);
+  EXPECT_EQ(result.calibrated[0].name, "track_width");
+  EXPECT_TRUE(result.named.empty());
+  EXPECT_DOUBLE_EQ(result.augmented.effects.at("track_width").at("scale"), 1.011);
+  EXPECT_EQ(result.augmented.effects.count("slip"), 0U);
+  EXPECT_NE(result.summary.find("Calibrated track_width: significant at 3.6 sigma"),
+            std::string::npos)
+      << result.summary;
+}
+
+TEST(QuestionCalibration, NothingIsCalibratedUnlessAskedFittedWholeAndExplained) {
+  {
+    CalibrationCase c;
+    const QuestionResult result = c.decide(false);
+    EXPECT_TRUE(result.calibrated.empty());
+    EXPECT_TRUE(result.augmented.effects.empty());
+  }
+  {
+    CalibrationCase c;  // the track fitted on the screening stretch only
+    c.full = {1, 0, 1};
+    EXPECT_TRUE(c.decide(true).calibrated.empty());
+  }
+  {
+    CalibrationCase c;  // worse than the nominal model
+    c.singles[1].fit.bic = 1.0;
+    EXPECT_TRUE(c.decide(true).calibrated.empty());
+  }
+  {
+    CalibrationCase c;  // a residual the library cannot explain: no value is trusted
+    const QuestionResult result = c.decide(true, {misfit("heading", 12.0, 2.5)});
+    EXPECT_EQ(result.verdict, Verdict::kUnexplained);
+    EXPECT_TRUE(result.calibrated.empty());
+  }
+  {
+    CalibrationCase c;  // on an SWPC robot a track width is no parameter of the model
+    c.base.drivetrain = DrivetrainKind::kSwpc;
+    EXPECT_TRUE(c.decide(true).calibrated.empty());
+  }
+}
+
 }  // namespace
 }  // namespace swivel::model_gap::detail

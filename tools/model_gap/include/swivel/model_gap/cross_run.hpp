@@ -2,12 +2,13 @@
 #pragma once
 // Cross-run evidence (tools/lab/GAP.md "Across runs"): a model fitted on one run of a robot is
 // judged on the robot's other runs. For every run in turn, the sensor-to-pose question names
-// what that run shows; the named model is then replayed on each other run beside the nominal
+// what that run shows (or, naming nothing, calibrates the robot model's own parameters it
+// fixes); the fitted model is then replayed on each other run beside the nominal
 // one, each with that run's own motion-capture nuisances fitted (they belong to the set-up, not
 // the robot), and the whole-run RMS position gap of the two is compared. Independently, the
-// values each run named are checked for agreement across runs within their stated sigmas.
-// Runs are judged only on runs of their own session: the folder their file is in (a session's
-// set-up, motion capture and floor are its own).
+// values each run named or calibrated are checked for agreement across runs within their stated
+// sigmas. Runs are judged only on runs of their own session: the folder their file is in (a
+// session's set-up, motion capture and floor are its own).
 
 #include <cstddef>
 #include <functional>
@@ -39,9 +40,10 @@ struct FitRun {
   std::string run;
   Verdict verdict = Verdict::kNoSignificantGap;
   std::string summary;
-  std::vector<FittedEffect> named;  ///< sensor to pose
-  std::vector<std::string> truth;   ///< its motion-capture nuisances, in words
-  RobotModel fitted;                ///< the nominal model with what it named
+  std::vector<FittedEffect> named;       ///< sensor to pose
+  std::vector<FittedEffect> calibrated;  ///< sensor to pose, when it named nothing
+  std::vector<std::string> truth;        ///< its motion-capture nuisances, in words
+  RobotModel fitted;                     ///< the nominal model with what it named or calibrated
   /// Per other run: nominal and fitted gap (RMS position), and their ratio fitted / nominal.
   std::vector<std::string> others;
   std::vector<double> nominal_rms_m;
@@ -49,7 +51,7 @@ struct FitRun {
   std::vector<double> ratio;
 };
 
-/// One named parameter across the runs that named it.
+/// One parameter across the runs that named or calibrated it.
 struct ParameterAgreement {
   std::string name;  ///< "effect.key"
   std::vector<std::string> runs;
@@ -71,15 +73,23 @@ struct CrossRunResult {
   std::vector<ParameterAgreement> agreement;
   double median_ratio = 0.0;  ///< over every (fit run, other run) pair
   std::size_t pairs = 0;
-  /// Over the pairs whose fit run named something (the others predict exactly as the nominal
-  /// model does, ratio 1), and their whole-run RMS position gaps, nominal and fitted.
+  /// Over the pairs whose fit run named or calibrated something (the others predict exactly
+  /// as the nominal model does, ratio 1), and their whole-run RMS position gaps, nominal and
+  /// fitted.
   double median_ratio_named = 0.0;
   std::size_t pairs_named = 0;
   double median_nominal_rms_m = 0.0;
   double median_fitted_rms_m = 0.0;
   std::size_t named = 0;        ///< sensor verdicts "named"
   std::size_t no_gap = 0;       ///< sensor verdicts "no significant gap"
+  std::size_t calibrated = 0;   ///< of those, runs that calibrated a parameter
   std::size_t unexplained = 0;  ///< sensor verdicts "unexplained residual"
+  /// The model fitted on all the runs together: the nominal one with every parameter that two
+  /// or more runs named or calibrated at its weighted mean (a value one run gave has nothing
+  /// to agree with). Written, folded, as DIR/model_pooled.yaml.
+  RobotModel pooled;
+  std::vector<std::string> pooled_from;      ///< "track_width.scale = 1.0127 +- 0.00028 (51 runs)"
+  std::vector<std::string> pooled_left_out;  ///< "wheel_radius.left_scale: 1 run"
 };
 
 /// Progress of a long cross-run analysis: (step done, steps in all, what).
@@ -89,7 +99,7 @@ using CrossRunProgress = std::function<void(std::size_t, std::size_t, const std:
 CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunData>& runs,
                               const GapOptions& options, const CrossRunProgress& progress = {});
 
-/// Writes DIR/cross_run.md and DIR/cross_run.json. Creates DIR.
+/// Writes DIR/cross_run.md, DIR/cross_run.json and DIR/model_pooled.yaml. Creates DIR.
 /// @throws std::runtime_error when a file cannot be written.
 void write_cross_run_report(const CrossRunResult& result, const RobotModel& nominal,
                             const std::string& dir);

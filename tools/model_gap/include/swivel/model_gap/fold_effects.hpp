@@ -43,8 +43,17 @@ struct FoldResult {
   std::vector<std::string> kept;
 };
 
+/// Whether effect `name` has a parameter in a robot model of drivetrain `kind` (the table
+/// above): what a run can calibrate rather than name.
+bool folds_into_robot_model(const std::string& name, DrivetrainKind kind);
+
 /// Folds `model.effects` into the model's own parameters where it has them.
 /// @throws std::invalid_argument as sim::validate_effects for an invalid effect.
 FoldResult fold_effects(const RobotModel& model);
+
+/// Writes fold_effects(model).model to `path` as YAML the daemon loads, under comment lines:
+/// `title`, then what was folded where and what stayed in `effects:` and why.
+/// @throws std::runtime_error when the file cannot be written.
+void write_folded_model(const RobotModel& model, const std::string& title, const std::string& path);
 
 }  // namespace swivel::model_gap

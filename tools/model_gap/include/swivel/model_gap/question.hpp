@@ -47,6 +47,13 @@ struct QuestionOptions {
   /// the pattern at least as large as the noise around it): a replay is an approximation,
   /// and what it misses by a fraction of the noise is not a missing effect.
   double min_misfit_size = 1.0;
+  /// Calibrate when nothing is named: the best candidate that is a parameter of the robot's
+  /// own model (fold_effects.hpp) and significant at min_z_calibrate, whatever its change per
+  /// window (a track width 1 % off changes each window by a fraction of the noise, and the
+  /// whole run's path by centimetres). A better value of a parameter the model has, not a
+  /// missing effect: reported apart from `named`, folded into the augmented model.
+  bool calibrate = false;
+  double min_z_calibrate = 3.0;
   std::size_t max_effects = 2;
   std::size_t pair_pool = 3;  ///< best single candidates tried as the second effect
   /// Screening of long runs: every candidate is first fitted on the first screen_fraction of
@@ -113,6 +120,7 @@ struct FittedEffect {
   std::vector<double> fit_values;
   std::vector<double> fit_covariance;  ///< row-major, resolution included, observable subspace
   std::vector<char> inverse;           ///< per key: fitted as 1 / value
+  std::vector<double> identity;        ///< per key, fit units: the nominal model's own value
 };
 
 /// One candidate (a single effect or a pair) after fitting.
@@ -161,6 +169,8 @@ struct QuestionResult {
   Verdict verdict = Verdict::kNoSignificantGap;
   std::string summary;
   std::vector<FittedEffect> named;
+  /// Calibrated (QuestionOptions::calibrate): set only when nothing was named or unexplained.
+  std::vector<FittedEffect> calibrated;
   std::vector<CandidateScore> candidates;  ///< best BIC first
   std::vector<MisfitTest> misfits;         ///< on the residual that remains, most significant first
   std::vector<ChannelGap> channels;
@@ -169,7 +179,7 @@ struct QuestionResult {
   std::vector<double> nuisance_sigmas;       ///< their 1-sigma (infinite: not fixed by the run)
   std::vector<double> residuals_before;      ///< channel-major, channel units
   std::vector<double> residuals_after;
-  RobotModel augmented;  ///< base plus the named effects
+  RobotModel augmented;  ///< base plus the named (or calibrated) effects
   double wall_time_s = 0.0;
 };
 
