@@ -116,6 +116,10 @@ void print_runs(const std::vector<CaseOutcome>& outcomes) {
                   p.key.c_str(), p.truth, p.value, p.sigma, p.deviation());
     }
     for (double z : o.effect_deviation_z) std::printf("    jointly %.1f sigma from the truth\n", z);
+    for (std::size_t k = 0; k < o.calibrated.size(); ++k) {
+      std::printf("    calibrated %s, %.1f sigma from the truth\n", o.calibrated[k].c_str(),
+                  o.calibration_deviation_z[k]);
+    }
   }
 }
 
@@ -206,6 +210,8 @@ bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, 
         at(0.5), at(0.9), r.back());
   }
   print_null_calibration(f, quantiles_path);
+  print_figure("calibrated, not named (clean runs)", f.clean_calibrated);
+  print_figure("calibrated values within 3 sigma of the truth", f.calibrated_within_3_sigma);
   print_figure("in-library effects named right, within 3 sigma", f.named_right);
   print_figure("outside effects: no wrong library name", f.outside_right);
   print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);

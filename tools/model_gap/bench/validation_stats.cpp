@@ -63,6 +63,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
   f.slowest_clean_rate_hz = std::numeric_limits<double>::infinity();
   for (const auto& o : outcomes) {
     total_cpu += o.cpu_time_s;
+    for (double z : o.calibration_deviation_z) f.calibrated_within_3_sigma.add(z <= 3.0);
     f.worst_cpu_s = std::max(f.worst_cpu_s, o.cpu_time_s);
     f.errors += o.error.empty() ? 0 : 1;
     switch (o.kind) {
@@ -73,6 +74,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         f.sensor_false_alarm.add(sensor);
         f.command_false_alarm.add(command);
         f.clean_noise_finding.add(!o.noise_findings.empty());
+        f.clean_calibrated.add(!o.calibrated.empty());
         if (o.error.empty()) f.clean_noise_ratios.push_back(o.max_noise_ratio);
         for (std::size_t q = 0; q < 2; ++q) {
           f.clean_single_z[q].insert(f.clean_single_z[q].end(), o.single_z[q].begin(),

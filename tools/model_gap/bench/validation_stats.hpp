@@ -60,6 +60,10 @@ struct SetFigures {
   std::array<std::vector<double>, 2> clean_single_z;
   /// Runs whose hidden or outside effect left a noise finding (library and outside runs).
   Proportion effect_noise_finding;
+  /// Clean runs on which the sensor question calibrated a parameter of the robot's own model
+  /// (not a finding), and every run's calibrated values within 3 sigma of their truth.
+  Proportion clean_calibrated;
+  Proportion calibrated_within_3_sigma;
   Proportion named_right;     ///< library runs: correct and values within 3 sigma
   Proportion outside_right;   ///< outside runs: the case's rule holds
   Proportion within_1_sigma;  ///< hidden parameters named and observable

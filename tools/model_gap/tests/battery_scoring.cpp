@@ -80,6 +80,35 @@ bool judge(CaseOutcome& out, const std::vector<std::string>& allowed_outside) {
   return correct;
 }
 
+// What the sensor question calibrated, and how far from its truth (score()).
+void score_calibration(const std::vector<HiddenEffect>& hidden, const QuestionResult& sensor,
+                       CaseOutcome& out) {
+  for (const FittedEffect& f : sensor.calibrated) {
+    out.calibrated.push_back(f.name);
+    std::vector<double> difference(f.fit_values.size(), 0.0);
+    for (std::size_t i = 0; i < difference.size() && i < f.identity.size(); ++i)
+      difference[i] = f.fit_values[i] - f.identity[i];
+    for (const auto& e : hidden) {
+      if (e.effect != f.name) continue;
+      for (const auto& [generator_key, truth] : e.params) {
+        const auto k =
+            std::find(f.keys.begin(), f.keys.end(), workflow_key(e.effect, generator_key));
+        if (k == f.keys.end()) continue;
+        const auto at = static_cast<std::size_t>(k - f.keys.begin());
+        if (at < difference.size() && at < f.inverse.size())
+          difference[at] = f.fit_values[at] - (f.inverse[at] != 0 ? 1.0 / truth : truth);
+      }
+    }
+    std::size_t rank = 0;
+    double z = std::numeric_limits<double>::infinity();
+    if (f.fit_covariance.size() == difference.size() * difference.size()) {
+      const double chi2 = mahalanobis_squared(difference, f.fit_covariance, rank);
+      z = rank > 0 ? chi_square_z(chi2, static_cast<double>(rank)) : 0.0;
+    }
+    out.calibration_deviation_z.push_back(z);
+  }
+}
+
 }  // namespace
 
 bool ParamCheck::observable() const { return std::isfinite(sigma) && sigma > 0.0; }
@@ -147,6 +176,7 @@ CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenE
     out.effect_deviation_z.push_back(z);
     if (!(z <= 3.0)) out.values_within_3_sigma = false;
   }
+  score_calibration(hidden, r.sensor, out);
   return out;
 }
 

@@ -63,7 +63,11 @@ struct CaseOutcome {
   /// Every named hidden effect within 3 sigma of its truth, jointly over its parameters (on
   /// the combinations the run fixes; the rest the workflow leaves at the model's values).
   bool values_within_3_sigma = false;
-  std::vector<double> effect_deviation_z;     ///< per named hidden effect: that joint distance
+  std::vector<double> effect_deviation_z;  ///< per named hidden effect: that joint distance
+  /// Sensor question: what it calibrated (QuestionOptions::calibrate), and per calibrated
+  /// effect the same joint distance from its truth (the hidden value, else the model's own).
+  std::vector<std::string> calibrated;
+  std::vector<double> calibration_deviation_z;
   std::string problem;                        ///< why not correct, for the report
   std::vector<ParamCheck> params;             ///< hidden parameters the workflow named
   std::array<double, 2> position_before_m{};  ///< final position error of each replay, before
