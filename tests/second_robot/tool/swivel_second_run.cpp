@@ -58,7 +58,8 @@ int run(int argc, char** argv) {
   std::string out;
   std::string model_out;
   app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff");
-  app.add_option("--true", truth, "NAME.PARAM=VALUE: the true robot (repeatable)");
+  app.add_option("--true", truth,
+                 "NAME.PARAM=VALUE: the true robot (repeatable; with --case, changes the case's)");
   app.add_option("--script", script, "waypoints, circles, spot_turns or mixed");
   app.add_option("--rate", rate, "row rate, Hz (20-100)");
   app.add_option("--duration", duration, "s");
@@ -93,6 +94,11 @@ int run(int argc, char** argv) {
       }
       spec = c.spec;
       description = c.id + ": " + c.description;
+      // The case with some of its physics changed: what a finding on it is due to.
+      for (const auto& a : truth) {
+        set_truth(spec, a);
+        description += " (changed: " + a + ")";
+      }
     } else {
       spec.design = robot;
       (void)design(robot);  // names the robots when unknown
