@@ -89,21 +89,47 @@ std::string fmt(double v, int precision = 4) {
   return s.str();
 }
 
-// The nominal model with every parameter two or more runs agree on at its weighted mean.
+// The effects a run named or calibrated, as one label: "track_width+wheel_radius".
+std::string effect_set(const FitRun& f) {
+  std::vector<std::string> names;
+  for (const std::vector<FittedEffect>* list : {&f.named, &f.calibrated}) {
+    for (const FittedEffect& e : *list) names.push_back(e.limits ? "limits" : e.name);
+  }
+  std::sort(names.begin(), names.end());
+  std::string label;
+  for (const std::string& n : names) label += (label.empty() ? "" : "+") + n;
+  return label;
+}
+
+std::string runs_text(std::size_t n) { return std::to_string(n) + (n == 1 ? " run" : " runs"); }
+
+// The model fitted on all the runs. Each run fitted its effects beside each other, so a
+// parameter is pooled only over runs that fixed the same set: a track fitted alone holds what
+// wheel radii would take beside it, and the two pooled from different runs would count it
+// twice. The set most runs fixed (two at least), each parameter at its weighted mean.
 void pool(const RobotModel& nominal, CrossRunResult& r) {
   r.pooled = nominal;
-  for (const ParameterAgreement& a : r.agreement) {
+  std::map<std::string, std::vector<FitRun>> by_set;
+  for (const FitRun& f : r.fits) {
+    if (const std::string set = effect_set(f); !set.empty()) by_set[set].push_back(f);
+  }
+  const std::vector<FitRun>* best = nullptr;
+  for (const auto& [set, runs] : by_set) {
+    if (best == nullptr || runs.size() > best->size()) best = &runs;
+  }
+  for (const auto& [set, runs] : by_set) {
+    if (&runs == best && runs.size() >= 2 && set.find("limits") == std::string::npos) continue;
+    r.pooled_left_out.push_back(set + ": " + runs_text(runs.size()) +
+                                (&runs == best ? "" : ", not the set most runs fixed"));
+  }
+  if (best == nullptr || best->size() < 2 ||
+      effect_set(best->front()).find("limits") != std::string::npos)
+    return;
+  for (const ParameterAgreement& a : agreement_of(*best)) {
     const std::size_t dot = a.name.find('.');
-    const std::string effect = a.name.substr(0, dot);
-    if (a.values.size() < 2 || effect == "limits") {
-      r.pooled_left_out.push_back(a.name + ": " + std::to_string(a.values.size()) +
-                                  (a.values.size() == 1 ? " run" : " runs"));
-      continue;
-    }
-    r.pooled.effects[effect][a.name.substr(dot + 1)] = a.weighted_mean;
+    r.pooled.effects[a.name.substr(0, dot)][a.name.substr(dot + 1)] = a.weighted_mean;
     r.pooled_from.push_back(a.name + " = " + fmt(a.weighted_mean, 6) + " +- " +
-                            fmt(a.sigma_of_mean, 2) + " (" + std::to_string(a.values.size()) +
-                            " runs)");
+                            fmt(a.sigma_of_mean, 2) + " (" + runs_text(a.values.size()) + ")");
   }
 }
 
@@ -321,9 +347,11 @@ void write_cross_run_markdown(const CrossRunResult& r, const RobotModel& nominal
        << " % |\n";
   }
   md << "\n## The model fitted on all the runs: `model_pooled.yaml`\n\n"
-     << "Every parameter two or more runs named or calibrated, at its weighted mean (one run's "
-        "value has nothing to agree with); judge it on runs it was not fitted on with "
-        "`swivel-lab gap-judge`.\n\n";
+     << "The set of effects most runs named or calibrated (two at least), each parameter at its "
+        "weighted mean over those runs: runs that fixed other sets fitted their parameters beside "
+        "other effects, and pooling across sets would count an effect twice (a track fitted "
+        "alone holds what wheel radii take beside it). Judge it on runs it was not fitted on "
+        "with `swivel-lab gap-judge`.\n\n";
   for (const std::string& line : r.pooled_from) md << "- " << line << "\n";
   for (const std::string& line : r.pooled_left_out) md << "- left out: " << line << "\n";
   if (!r.skipped.empty()) {
@@ -345,8 +373,8 @@ void write_cross_run_report(const CrossRunResult& r, const RobotModel& nominal,
   if (!md) throw std::runtime_error("cannot write " + dir + "/cross_run.md");
   write_folded_model(r.pooled,
                      nominal.name + ", fitted on " + std::to_string(r.fits.size()) +
-                         " runs together (swivel-lab gap-cross: every parameter two or more runs "
-                         "named or calibrated, at its weighted mean)",
+                         " runs together (swivel-lab gap-cross: the set of effects most runs "
+                         "named or calibrated, each parameter at its weighted mean over them)",
                      dir + "/model_pooled.yaml");
 }
 

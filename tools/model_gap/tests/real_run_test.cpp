@@ -211,6 +211,24 @@ TEST(RealRun, SquaresOfASessionNeverDevelopedOnFixBothWheelRadiiAsTheAuthorsDid)
   }
 }
 
+// A track fitted alone holds what wheel radii would take beside it: pooled from different runs,
+// a track from one and radii from others would count that twice. The pooled model takes the
+// set of effects most runs fixed (both squares: the radii) and leaves the free run's track out.
+TEST(RealRun, ThePooledModelDoesNotMixEffectsFittedInDifferentSets) {
+  const RobotModel model = optiodom_model();
+  const std::vector<RunData> runs = {import_vendored("030120210001_run-01"),
+                                     import_vendored("230620202258_run-02"),
+                                     import_vendored("230620202258_run-03")};
+  const CrossRunResult cross = cross_validate(model, runs, {});
+  EXPECT_EQ(cross.pooled.effects.count("track_width"), 0U);
+  ASSERT_EQ(cross.pooled.effects.count("wheel_radius"), 1U);
+  EXPECT_EQ(cross.pooled.effects.at("wheel_radius").size(), 2U);
+  ASSERT_EQ(cross.pooled_left_out.size(), 1U);
+  EXPECT_EQ(cross.pooled_left_out[0], "track_width: 1 run, not the set most runs fixed");
+  // The agreement table still shows every parameter any run fixed.
+  EXPECT_EQ(cross.agreement.size(), 3U);
+}
+
 bool scores_effect(const QuestionResult& q, const std::string& effect) {
   for (const CandidateScore& c : q.candidates) {
     for (const std::string& e : c.effects)

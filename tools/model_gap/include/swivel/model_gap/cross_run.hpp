@@ -84,12 +84,13 @@ struct CrossRunResult {
   std::size_t no_gap = 0;       ///< sensor verdicts "no significant gap"
   std::size_t calibrated = 0;   ///< of those, runs that calibrated a parameter
   std::size_t unexplained = 0;  ///< sensor verdicts "unexplained residual"
-  /// The model fitted on all the runs together: the nominal one with every parameter that two
-  /// or more runs named or calibrated at its weighted mean (a value one run gave has nothing
-  /// to agree with). Written, folded, as DIR/model_pooled.yaml.
+  /// The model fitted on all the runs together: the nominal one with the set of effects most
+  /// runs named or calibrated (two at least; runs that fixed another set fitted beside other
+  /// effects, and pooling across sets would count an effect twice), each parameter at its
+  /// weighted mean over those runs. Written, folded, as DIR/model_pooled.yaml.
   RobotModel pooled;
-  std::vector<std::string> pooled_from;      ///< "track_width.scale = 1.0127 +- 0.00028 (51 runs)"
-  std::vector<std::string> pooled_left_out;  ///< "wheel_radius.left_scale: 1 run"
+  std::vector<std::string> pooled_from;      ///< "track_width.scale = 1.0127 +- 0.00028 (49 runs)"
+  std::vector<std::string> pooled_left_out;  ///< "track_width+wheel_radius: 1 run, not the ..."
 };
 
 /// Progress of a long cross-run analysis: (step done, steps in all, what).
