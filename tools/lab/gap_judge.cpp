@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "gap_options.hpp"
 #include "swivel/model_gap/judge.hpp"
 #include "swivel/robot_model_io.hpp"
 
@@ -59,19 +60,13 @@ void add_gap_judge_command(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "gap-judge",
       "Judge fitted robot models on runs they were not fitted on: each run's whole-run RMS "
-      "position gap under the nominal model and each fitted one");
-  cmd->add_option("--model", o->model_file, "nominal robot model (YAML), the reference")
-      ->required()
-      ->check(CLI::ExistingFile);
+      "position gap under the nominal model (--model, the reference) and each fitted one");
+  add_gap_model_options(cmd, o->model_file, o->out_dir, o->gap);
   cmd->add_option("--fitted", o->fitted_files,
                   "a fitted robot model to judge beside it (repeatable; e.g. gap-cross's "
                   "model_pooled.yaml)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out_dir, "report directory (created)")->required();
-  cmd->add_option("--window", o->gap.window_s, "length of the windows compared, s")
-      ->capture_default_str()
-      ->check(CLI::Range(0.2, 10.0));
   cmd->add_option("runs", o->run_files,
                   "run logs (CSV) of the robot; grouped by the folder above each run's folder")
       ->required()

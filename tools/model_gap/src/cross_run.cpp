@@ -15,14 +15,15 @@
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
-namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+double median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
+
+namespace {
 
 // Weighted mean and its sigma of values with sigmas, leaving out index `skip` (none: size).
 std::pair<double, double> weighted_mean(const std::vector<double>& v, const std::vector<double>& s,

@@ -1,11 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "swivel/model_gap/judge.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -13,13 +10,6 @@
 
 namespace swivel::model_gap {
 namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 std::string group_of(const std::string& source) {
   const std::filesystem::path session = std::filesystem::path(source).parent_path();

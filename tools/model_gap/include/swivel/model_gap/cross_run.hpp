@@ -21,6 +21,9 @@
 
 namespace swivel::model_gap {
 
+/// The median of `values` (NaN when there are none).
+double median(std::vector<double> values);
+
 /// The sensor-to-pose gap of one run under one model, with the run's motion-capture nuisances
 /// fitted for that model.
 struct HeldOutGap {
