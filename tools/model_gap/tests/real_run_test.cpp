@@ -295,6 +295,14 @@ TEST(RealRun, ARunTooShortForItsWindowsSaysSo) {
     EXPECT_NE(std::string(e.what()).find("the workflow needs at least 10"), std::string::npos)
         << e.what();
   }
+  // Judged among others, it is set aside with that reason and the rest are judged.
+  const RobotModel model = optiodom_model();
+  const JudgeResult judged =
+      judge_models({model}, {"nominal"}, {run, import_vendored("231220200157_run-02")}, {});
+  EXPECT_EQ(judged.runs.size(), 1U);
+  ASSERT_EQ(judged.skipped.size(), 1U);
+  EXPECT_NE(judged.skipped[0].find("the workflow needs at least 10"), std::string::npos)
+      << judged.skipped[0];
 }
 
 // An absolute steering encoder reports (-pi, pi]: a caster that turns round crosses +-pi. The
