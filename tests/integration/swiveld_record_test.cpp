@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -158,7 +159,12 @@ TEST(SwiveldRecordOverDds, RecordsEverySampleAndTheGapWorkflowFindsNothingMissin
   daemon.signal(SIGTERM);
   EXPECT_EQ(daemon.exit_code(Seconds(10)), 0) << daemon.err();
   EXPECT_NE(daemon.err().find("run samples published, 0 lost"), std::string::npos) << daemon.err();
-  std::filesystem::remove_all(dir);
+  // A recording that failed is kept: the run and the report are what tells why.
+  if (HasFailure()) {
+    std::cerr << "kept for diagnosis: " << dir << "\n";
+  } else {
+    std::filesystem::remove_all(dir);
+  }
 }
 
 TEST(SwiveldRecordOverDds, RefusalsNameTheProblem) {

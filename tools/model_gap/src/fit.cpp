@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -197,12 +198,11 @@ double log_erfc(double y) {
 
 }  // namespace
 
-double chi_square_z(double chi2, double dof) {
-  if (!(dof > 0.0) || !(chi2 > 0.0)) return 0.0;
-  if (!std::isfinite(chi2)) return std::numeric_limits<double>::infinity();
-  const double log_p = log_upper_gamma(0.5 * dof, 0.5 * chi2);
-  // The |z| of a normal deviate with the same two-sided tail: erfc(z / sqrt 2) = p, by
-  // Newton's method on ln erfc from the first terms of its asymptotic inverse.
+namespace {
+
+// The |z| of a normal deviate with the same two-sided tail as ln p: erfc(z / sqrt 2) = p, by
+// Newton's method on ln erfc from the first terms of its asymptotic inverse.
+double z_of_log_tail(double log_p) {
   if (log_p >= 0.0) return 0.0;
   double z = std::sqrt(std::max(0.0, -2.0 * log_p - std::log(std::max(-2.0 * log_p, 1.0))));
   for (int i = 0; i < 50; ++i) {
@@ -215,6 +215,31 @@ double chi_square_z(double chi2, double dof) {
     if (std::abs(step) < 1e-12) break;
   }
   return z;
+}
+
+}  // namespace
+
+double chi_square_z(double chi2, double dof) {
+  if (!(dof > 0.0) || !(chi2 > 0.0)) return 0.0;
+  if (!std::isfinite(chi2)) return std::numeric_limits<double>::infinity();
+  return z_of_log_tail(log_upper_gamma(0.5 * dof, 0.5 * chi2));
+}
+
+double wald_f_z(double wald, double rank, double residual_dof) {
+  if (!(rank > 0.0) || !(wald > 0.0)) return 0.0;
+  if (!std::isfinite(wald)) return std::numeric_limits<double>::infinity();
+  if (!(residual_dof >= 1.0)) return 0.0;  // nothing left to estimate the covariance from
+  // Errors answered with a value (NaN, 0), never an exception.
+  using Policy = boost::math::policies::policy<
+      boost::math::policies::domain_error<boost::math::policies::ignore_error>,
+      boost::math::policies::overflow_error<boost::math::policies::ignore_error>,
+      boost::math::policies::evaluation_error<boost::math::policies::ignore_error>>;
+  const boost::math::fisher_f_distribution<double, Policy> f(rank, residual_dof);
+  const double p = boost::math::cdf(boost::math::complement(f, wald / rank));
+  // Past double's range the tail is beyond any threshold; the chi-square conversion (which
+  // the F tail approaches from below) keeps the order of such statistics.
+  if (!(p > 0.0)) return chi_square_z(wald, rank);
+  return z_of_log_tail(std::log(p));
 }
 
 double mahalanobis_squared(const std::vector<double>& difference,

@@ -13,24 +13,24 @@ constexpr std::size_t kWindows = 120;
 
 // Two position channels and a heading channel of pure noise (sigma 1), with the robot
 // turning through every heading and its wheels through every angle.
-MisfitInputs noise_only(unsigned seed) {
+MisfitInputs noise_only(unsigned seed, std::size_t windows = kWindows) {
   MisfitInputs in;
   in.channels = {{"dx", "m", Question::kSensorToPose, ChannelKind::kPosition, 0},
                  {"dy", "m", Question::kSensorToPose, ChannelKind::kPosition, 0},
                  {"dyaw", "rad", Question::kSensorToPose, ChannelKind::kHeading, 0}};
-  in.windows = kWindows;
+  in.windows = windows;
   std::mt19937 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (std::size_t c = 0; c < 3; ++c) {
-    for (std::size_t j = 0; j < kWindows; ++j) {
+    for (std::size_t j = 0; j < windows; ++j) {
       in.residuals.push_back(gauss(rng));
       in.sigma.push_back(1.0);
       in.own_change.push_back(0.3 * std::sin(0.37 * static_cast<double>(j)) + (c == 0 ? 0.2 : 0.0));
     }
   }
-  in.wheel_sin_change.assign(1, std::vector<double>(kWindows));
-  in.wheel_cos_change.assign(1, std::vector<double>(kWindows));
-  for (std::size_t j = 0; j < kWindows; ++j) {
+  in.wheel_sin_change.assign(1, std::vector<double>(windows));
+  in.wheel_cos_change.assign(1, std::vector<double>(windows));
+  for (std::size_t j = 0; j < windows; ++j) {
     in.accel.push_back(j % 7 == 0 ? 0.5 : 0.0);
     in.start_yaw_rad.push_back(0.29 * static_cast<double>(j));
     const double pa = 5.1 * static_cast<double>(j);
@@ -115,6 +115,44 @@ TEST(Misfit, ATransientSplitAcrossTwoWindowsIsNotAJump) {
   same_sign.residuals[0 * kWindows + 30] += 14.0;
   same_sign.residuals[0 * kWindows + 31] += 14.0;
   EXPECT_GT(z_of(misfit_tests(same_sign), "jumps", "dx"), 5.0);
+}
+
+// A short run (30 windows, as a recording of half a minute gives) has few windows to
+// estimate each pattern's uncertainty from, fewer still for a regressor that lives in a few
+// windows (acceleration at the command steps). Its tests must still exceed 3 sigma on noise
+// no more often than a normal deviate does (0.27 %), and 5 sigma, the bar, practically never.
+TEST(Misfit, OnAShortRunNoiseExceedsThreeSigmaNoMoreOftenThanStated) {
+  constexpr std::size_t kShort = 30;
+  constexpr unsigned kRuns = 2000;
+  std::size_t tests = 0;
+  std::size_t over3 = 0;
+  std::size_t over5 = 0;
+  for (unsigned seed = 1; seed <= kRuns; ++seed) {
+    for (const MisfitTest& t : misfit_tests(noise_only(seed, kShort))) {
+      if (t.test == "jumps") continue;  // a count of windows, on its own scale
+      ++tests;
+      if (t.z > 3.0) ++over3;
+      if (t.z > 5.0) ++over5;
+    }
+  }
+  ASSERT_EQ(tests, 7U * kRuns);
+  EXPECT_LT(static_cast<double>(over3) / static_cast<double>(tests), 2.0 * 0.0027)
+      << over3 << " of " << tests << " above 3 sigma";
+  EXPECT_EQ(over5, 0U) << "of " << tests;
+}
+
+// What the small-sample reference takes from noise it must not take from a clear pattern: a
+// wheel pattern of 2.4 noise sigmas RMS on the same 30 windows is still found. (Thirty windows
+// cannot make any pattern much more certain than 7 sigma: the noise is estimated from them.)
+TEST(Misfit, APatternWithTheWheelsTurnIsFoundOnAShortRun) {
+  constexpr std::size_t kShort = 30;
+  std::size_t found = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    MisfitInputs in = noise_only(seed, kShort);
+    for (std::size_t j = 0; j < kShort; ++j) in.residuals[j] += 3.0 * in.wheel_sin_change[0][j];
+    if (z_of(misfit_tests(in), "wheel_periodic", "dx") > 5.0) ++found;
+  }
+  EXPECT_EQ(found, 20U);
 }
 
 }  // namespace

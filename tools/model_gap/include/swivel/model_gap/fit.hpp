@@ -113,6 +113,11 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
 /// three-million event.
 double chi_square_z(double chi2, double dof);
 
+/// chi_square_z() for a Wald statistic whose covariance was estimated from the same data:
+/// wald / rank against Fisher's F(rank, residual_dof), which a few dozen windows need (the
+/// chi-square tail, its limit, is far too thin there).
+double wald_f_z(double wald, double rank, double residual_dof);
+
 /// d' C^+ d over the observable subspace of the covariance C (p x p row-major), and its
 /// rank; d = values - reference.
 double mahalanobis_squared(const std::vector<double>& difference,
