@@ -242,6 +242,15 @@ double wald_f_z(double wald, double rank, double residual_dof) {
   return z_of_log_tail(std::log(p));
 }
 
+double fewest_windows(const std::vector<double>& effective_windows, std::size_t first,
+                      std::size_t count) {
+  double fewest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = first; k < first + count && k < effective_windows.size(); ++k) {
+    if (effective_windows[k] > 0.0) fewest = std::min(fewest, effective_windows[k]);
+  }
+  return std::isfinite(fewest) ? fewest : 0.0;
+}
+
 double mahalanobis_squared(const std::vector<double>& difference,
                            const std::vector<double>& covariance, std::size_t& rank) {
   const auto p = static_cast<Eigen::Index>(difference.size());
@@ -320,12 +329,45 @@ Autocorrelation fit_autocorrelation(const std::vector<double>& series) {
 
 }  // namespace
 
+namespace {
+
+// Per coefficient: how many windows its sandwich variance rests on, (sum_w V_w)^2 / sum_w V_w^2
+// with V_w = sum over the window's rows of (B^-1 J_i)^2, the window's share of the variance
+// were the rows independent with equal noise (Satterthwaite's degrees of freedom of a sum of
+// squares).
+std::vector<double> satterthwaite_windows(const std::vector<double>& jacobian, std::size_t p,
+                                          const std::vector<double>& r,
+                                          const std::vector<std::size_t>& row_window,
+                                          std::size_t window_count,
+                                          const Eigen::MatrixXd& inverse) {
+  const auto pp = static_cast<Eigen::Index>(p);
+  Eigen::MatrixXd share = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    if (!std::isfinite(r[i])) continue;
+    const Eigen::Map<const Eigen::VectorXd> row(jacobian.data() + i * p, pp);
+    share.col(static_cast<Eigen::Index>(row_window[i])) +=
+        (inverse * row).array().square().matrix();
+  }
+  // At most the windows with data less the coefficients.
+  const double windows =
+      static_cast<double>((share.colwise().sum().array() > 0.0).count()) - static_cast<double>(p);
+  std::vector<double> out(p, 0.0);
+  for (Eigen::Index k = 0; k < pp; ++k) {
+    const double sum = share.row(k).sum();
+    const double sum_sq = share.row(k).squaredNorm();
+    out[static_cast<std::size_t>(k)] = sum_sq > 0.0 ? std::min(sum * sum / sum_sq, windows) : 0.0;
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
-                                        bool scale_free) {
+                                        bool scale_free, std::vector<double>* effective_windows) {
   const auto pp = static_cast<Eigen::Index>(p);
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
   Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
@@ -381,6 +423,9 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   const Eigen::MatrixXd& inverse = split.inverse;
   const Eigen::MatrixXd& null_space = split.null_space;
   const Eigen::MatrixXd cov = inverse * omega * inverse;
+  if (effective_windows != nullptr) {
+    *effective_windows = satterthwaite_windows(jacobian, p, r, row_window, window_count, inverse);
+  }
   observable.assign(p, 1);
   std::vector<double> out(p * p);
   for (Eigen::Index a = 0; a < pp; ++a) {
@@ -525,7 +570,7 @@ void robust_covariance(const FitProblem& problem, const std::vector<double>& den
   if (groups.empty()) groups.assign(problem.row_count, 0);
   const std::vector<double> cov_z =
       sandwich_covariance(dense, p, out.residuals, problem.row_window, groups, problem.window_count,
-                          out.observable, scale_free);
+                          out.observable, scale_free, &out.effective_windows);
   // The same, as if the rows were independent.
   naive_covariance(dense, specs, scale_free, out);
   out.covariance.assign(p * p, 0.0);

@@ -71,44 +71,30 @@ Regression regress(const std::vector<double>& y, const std::vector<double>& x, s
   std::vector<double> r_scores(n, std::numeric_limits<double>::quiet_NaN());
   std::vector<double> jac(n * p, 0.0);
   double rss = 0.0;
-  // Per coefficient, the sums of its rows' weights squared and to the fourth: (sum w^2)^2 /
-  // sum w^4 is the number of windows its variance is in effect estimated from (Satterthwaite),
-  // few when a regressor lives in a few windows (acceleration at a handful of command steps).
-  Eigen::ArrayXd weight2 = Eigen::ArrayXd::Zero(pp);
-  Eigen::ArrayXd weight4 = Eigen::ArrayXd::Zero(pp);
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(y[i])) continue;
     const Eigen::Map<const Eigen::VectorXd> row(x.data() + i * p, pp);
     if (!row.allFinite()) continue;
     r[i] = y[i] - row.dot(beta);
     rss += r[i] * r[i];
-    const Eigen::ArrayXd weights = (xtx_inverse * row).array();
-    weight2 += weights.square();
-    weight4 += weights.square().square();
-    const double leverage = row.dot(weights.matrix());
+    const double leverage = row.dot(xtx_inverse * row);
     r_scores[i] = r[i] / std::max(1.0 - leverage, kMinOneMinusLeverage);
     for (std::size_t k = 0; k < p; ++k) jac[i * p + k] = -x[i * p + k];
   }
   std::vector<char> observable;
-  const std::vector<double> cov =
-      sandwich_covariance(jac, p, r_scores, window, group, windows, observable);
+  std::vector<double> effective_windows;
+  const std::vector<double> cov = sandwich_covariance(jac, p, r_scores, window, group, windows,
+                                                      observable, false, &effective_windows);
   std::vector<double> b(p);
   for (std::size_t k = 0; k < p; ++k) b[k] = beta(static_cast<Eigen::Index>(k));
   std::size_t rank = 0;
   const double chi2 = mahalanobis_squared(b, cov, rank);
   // The covariance is estimated from the windows themselves: F, not chi-square, on the
-  // fewest windows any coefficient's variance rests on.
-  std::vector<char> window_used(windows, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (std::isfinite(r[i])) window_used[window[i]] = 1;
-  }
-  const auto windows_used =
-      static_cast<double>(std::count(window_used.begin(), window_used.end(), 1));
-  double dof = windows_used - static_cast<double>(p);
-  for (Eigen::Index k = 0; k < pp; ++k) {
-    if (weight4(k) > 0.0) dof = std::min(dof, weight2(k) * weight2(k) / weight4(k));
-  }
-  out.z = rank > 0 ? wald_f_z(chi2, static_cast<double>(rank), dof) : 0.0;
+  // fewest windows any coefficient's variance rests on (few when a regressor lives in a few
+  // windows: acceleration at a handful of command steps).
+  out.z = rank > 0
+              ? wald_f_z(chi2, static_cast<double>(rank), fewest_windows(effective_windows, 0, p))
+              : 0.0;
   out.share = std::clamp(1.0 - rss / yty, 0.0, 1.0);
   // Against the noise left around the pattern, not the modelled noise: a noise model fitted
   // to these residuals has taken in part of the pattern itself.

@@ -134,7 +134,10 @@ double added_z(const FitOutcome& with, std::size_t first, std::size_t count, dou
   const double s2 = with.rss / static_cast<double>(with.n - p);
   if (!(s2 > 0.0)) return 0.0;
   const double lr = std::max(0.0, rss_without - with.rss) / s2;
-  return chi_square_z(lr / inflation, static_cast<double>(rank));
+  // Against F on the windows the effect's parameters rest on: an acceleration limit is
+  // informed by a handful of command steps, and its z must not be that of a hundred windows.
+  return wald_f_z(lr / inflation, static_cast<double>(rank),
+                  fewest_windows(with.effective_windows, first, count));
 }
 
 CandidateScore score_of(const Fitted& f) {

@@ -175,6 +175,50 @@ TEST(FitTest, ChiSquareAsANormalDeviate) {
   EXPECT_EQ(chi_square_z(0.0, 3.0), 0.0);
 }
 
+// A Wald statistic whose covariance rests on few windows is judged against F: the same
+// statistic means less on 5 windows than on a thousand, where F meets the chi-square. Student's
+// t with 5 degrees of freedom has its two-sided 1 % point at 4.032.
+TEST(FitTest, AWaldStatisticOnFewWindowsIsJudgedAgainstF) {
+  EXPECT_NEAR(wald_f_z(25.0, 1.0, 1e7), chi_square_z(25.0, 1.0), 1e-3);
+  EXPECT_NEAR(wald_f_z(4.032 * 4.032, 1.0, 5.0), 2.5758, 2e-3);
+  EXPECT_LT(wald_f_z(25.0, 1.0, 5.0), wald_f_z(25.0, 1.0, 30.0));
+  EXPECT_LT(wald_f_z(25.0, 1.0, 30.0), chi_square_z(25.0, 1.0));
+  EXPECT_EQ(wald_f_z(25.0, 1.0, 0.5), 0.0);  // nothing left to judge the covariance by
+  EXPECT_GT(wald_f_z(1e6, 2.0, 40.0), 8.0);  // far past double's tail: still ordered, large
+}
+
+// How many windows each coefficient's variance rests on: one that moves the residuals in 5 of
+// 100 windows rests on 5; one that moves them alike in all rests on all (less the two fitted).
+TEST(FitTest, TheWindowsACoefficientRestsOnAreCounted) {
+  constexpr std::size_t kWindows = 100;
+  constexpr std::size_t kRows = 4;  // per window
+  std::vector<double> jacobian;
+  std::vector<double> residuals;
+  std::vector<std::size_t> row_window;
+  std::vector<std::size_t> row_group;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (std::size_t w = 0; w < kWindows; ++w) {
+    for (std::size_t i = 0; i < kRows; ++i) {
+      jacobian.push_back(1.0);
+      jacobian.push_back(w % 20 == 0 ? 1.0 : 0.0);
+      residuals.push_back(gauss(rng));
+      row_window.push_back(w);
+      row_group.push_back(i);
+    }
+  }
+  std::vector<char> observable;
+  std::vector<double> effective;
+  (void)sandwich_covariance(jacobian, 2, residuals, row_window, row_group, kWindows, observable,
+                            false, &effective);
+  ASSERT_EQ(effective.size(), 2U);
+  EXPECT_NEAR(effective[0], kWindows - 2.0, 5.0);
+  EXPECT_GT(effective[1], 5.0);  // a little more: the constant's estimate enters it too
+  EXPECT_LT(effective[1], 6.0);
+  EXPECT_EQ(fewest_windows(effective, 0, 2), effective[1]);
+  EXPECT_EQ(fewest_windows(effective, 0, 1), effective[0]);
+}
+
 TEST(FitTest, MahalanobisUsesOnlyTheObservableSubspace) {
   // Variance 4 along (1, 1) / sqrt(2), nothing along (1, -1).
   const std::vector<double> cov = {2.0, 2.0, 2.0, 2.0};

@@ -73,6 +73,8 @@ struct FitOutcome {
   std::vector<double> naive_covariance;  ///< p x p row-major, observable subspace
   std::vector<double> covariance;        ///< p x p row-major, observable subspace only
   std::vector<char> observable;          ///< per parameter
+  /// Per parameter: the windows its sandwich variance rests on (sandwich_covariance()).
+  std::vector<double> effective_windows;
   double rss = 0.0;
   std::size_t n = 0;  ///< rows with data
   double bic = 0.0;
@@ -100,12 +102,15 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
 /// flags the parameters the rows determine.
 /// `scale_free`: judge the combinations not fixed on the information scaled to a unit diagonal
 /// (ParamSpec::scale_free), else against the largest eigenvalue in the parameters' own units.
+/// `effective_windows` (when given): per coefficient, the number of windows its variance in
+/// effect rests on (Satterthwaite), the second degree of freedom of wald_f_z().
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
-                                        bool scale_free = false);
+                                        bool scale_free = false,
+                                        std::vector<double>* effective_windows = nullptr);
 
 /// Significance of a chi-square statistic with `dof` degrees of freedom as the equivalent
 /// normal deviate (from the exact upper tail, the regularized incomplete gamma function):
@@ -117,6 +122,10 @@ double chi_square_z(double chi2, double dof);
 /// wald / rank against Fisher's F(rank, residual_dof), which a few dozen windows need (the
 /// chi-square tail, its limit, is far too thin there).
 double wald_f_z(double wald, double rank, double residual_dof);
+
+/// The fewest windows any of the coefficients [first, first + count) rests on (0: none).
+double fewest_windows(const std::vector<double>& effective_windows, std::size_t first,
+                      std::size_t count);
 
 /// d' C^+ d over the observable subspace of the covariance C (p x p row-major), and its
 /// rank; d = values - reference.
