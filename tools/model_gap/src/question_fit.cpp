@@ -134,10 +134,13 @@ double added_z(const FitOutcome& with, std::size_t first, std::size_t count, dou
   const double s2 = with.rss / static_cast<double>(with.n - p);
   if (!(s2 > 0.0)) return 0.0;
   const double lr = std::max(0.0, rss_without - with.rss) / s2;
-  // Against F on the windows the effect's parameters rest on: an acceleration limit is
-  // informed by a handful of command steps, and its z must not be that of a hundred windows.
-  return wald_f_z(lr / inflation, static_cast<double>(rank),
-                  fewest_windows(with.effective_windows, first, count));
+  // Against F on what the variance was estimated from. Where the sandwich widens it, that is
+  // the windows the effect's parameters rest on: an acceleration limit is informed by a
+  // handful of command steps, and its z must not be that of a hundred windows. Otherwise the
+  // rows' own variance, from every row.
+  const double dof = inflation > 1.0 ? fewest_windows(with.effective_windows, first, count)
+                                     : static_cast<double>(with.n - p);
+  return wald_f_z(lr / inflation, static_cast<double>(rank), dof);
 }
 
 CandidateScore score_of(const Fitted& f) {
