@@ -187,18 +187,12 @@ ValidationCase outside_case(std::uint64_t first_seed, std::size_t index) {
   return c;
 }
 
-std::vector<ValidationCase> validation_set(bool smoke, std::size_t clean, std::size_t library,
-                                           std::size_t outside) {
+std::vector<ValidationCase> validation_set(const SeedRanges& seeds, std::size_t clean,
+                                           std::size_t library, std::size_t outside) {
   std::vector<ValidationCase> out;
-  for (std::size_t i = 0; i < clean; ++i) {
-    out.push_back(clean_case(smoke ? kSmokeCleanSeed : kValidationCleanSeed, i));
-  }
-  for (std::size_t i = 0; i < library; ++i) {
-    out.push_back(library_case(smoke ? kSmokeLibrarySeed : kValidationLibrarySeed, i));
-  }
-  for (std::size_t i = 0; i < outside; ++i) {
-    out.push_back(outside_case(smoke ? kSmokeOutsideSeed : kValidationOutsideSeed, i));
-  }
+  for (std::size_t i = 0; i < clean; ++i) out.push_back(clean_case(seeds.clean, i));
+  for (std::size_t i = 0; i < library; ++i) out.push_back(library_case(seeds.library, i));
+  for (std::size_t i = 0; i < outside; ++i) out.push_back(outside_case(seeds.outside, i));
   return out;
 }
 

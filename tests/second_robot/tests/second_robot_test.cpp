@@ -319,8 +319,8 @@ TEST(SecondRobotTruth, AssignmentsNameTheirProblem) {
 }
 
 TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
-  const std::vector<ValidationCase> set =
-      validation_set(false, kValidationCleanRuns, kValidationLibraryRuns, kValidationOutsideRuns);
+  const std::vector<ValidationCase> set = validation_set(
+      kValidationSeeds, kValidationCleanRuns, kValidationLibraryRuns, kValidationOutsideRuns);
   std::set<std::string> robots;
   std::set<bool> swpc;
   std::set<std::uint64_t> seeds;
@@ -351,9 +351,12 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   EXPECT_LE(low, 25.0);
   EXPECT_GE(high, 95.0);
   EXPECT_EQ(effects.size(), 11U);
-  // The smoke set is another range.
-  for (const ValidationCase& c : validation_set(true, 10, 17, 3)) {
-    EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
+  // The smoke set and the first validation set (development data now) are other ranges.
+  for (const SeedRanges& other : {kSmokeSeeds, kFirstValidationSeeds}) {
+    for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
+                                                  kValidationLibraryRuns, kValidationOutsideRuns)) {
+      EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
+    }
   }
 }
 
@@ -368,7 +371,7 @@ namespace {
 // Checked on the smoke range, window by window: ground lost by any wheel in one second.
 TEST(SecondRobotValidationSet, CleanRunsSlipLessThanTheNoise) {
   for (std::size_t index : {0U, 1U, 3U, 7U}) {
-    RunSpec spec = clean_case(kSmokeCleanSeed, index).spec;
+    RunSpec spec = clean_case(kSmokeSeeds.clean, index).spec;
     spec.noise = false;
     const Design d = design(spec.design);
     const std::vector<Row> rows = simulate(spec);

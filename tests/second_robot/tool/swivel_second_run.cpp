@@ -54,7 +54,7 @@ int run(int argc, char** argv) {
   bool no_noise = false;
   std::string case_kind;
   std::size_t index = 0;
-  bool validation_seeds = false;
+  std::string seeds = "smoke";
   std::string out;
   std::string model_out;
   app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff");
@@ -72,8 +72,11 @@ int run(int argc, char** argv) {
   app.add_flag("--no-noise", no_noise, "no sensor noise or clock jitter");
   app.add_option("--case", case_kind, "a case of the smoke set: clean, library or outside");
   app.add_option("--index", index, "with --case: its index");
-  app.add_flag("--validation-seeds", validation_seeds,
-               "with --case: from the validation set instead of the smoke set");
+  app.add_option("--seeds", seeds,
+                 "with --case: its seed ranges, smoke (default), validation (do not look at "
+                 "those while developing) or first-validation (the first validation set, "
+                 "development data now)")
+      ->check(CLI::IsMember({"smoke", "validation", "first-validation"}));
   app.add_option("--out", out, "run log (CSV)")->required();
   app.add_option("--model-out", model_out, "nominal model (YAML)");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;
@@ -83,12 +86,15 @@ int run(int argc, char** argv) {
   try {
     if (!case_kind.empty()) {
       ValidationCase c;
+      const SeedRanges& ranges = seeds == "validation"         ? kValidationSeeds
+                                 : seeds == "first-validation" ? kFirstValidationSeeds
+                                                               : kSmokeSeeds;
       if (case_kind == "clean") {
-        c = clean_case(validation_seeds ? kValidationCleanSeed : kSmokeCleanSeed, index);
+        c = clean_case(ranges.clean, index);
       } else if (case_kind == "library") {
-        c = library_case(validation_seeds ? kValidationLibrarySeed : kSmokeLibrarySeed, index);
+        c = library_case(ranges.library, index);
       } else if (case_kind == "outside") {
-        c = outside_case(validation_seeds ? kValidationOutsideSeed : kSmokeOutsideSeed, index);
+        c = outside_case(ranges.outside, index);
       } else {
         throw std::invalid_argument("--case " + case_kind + ": expected clean, library or outside");
       }
