@@ -104,11 +104,46 @@ std::string effect_set(const FitRun& f) {
 
 std::string runs_text(std::size_t n) { return std::to_string(n) + (n == 1 ? " run" : " runs"); }
 
+// A track fixed alone by runs turning both ways round: the track and a left/right radius
+// difference (track_by_turn.hpp), pooled as such when the difference is significant at
+// `min_z`. False: pool the track's weighted mean instead.
+bool pool_track_by_turn(const RobotModel& nominal, const std::vector<FitRun>& runs, double min_z,
+                        CrossRunResult& r) {
+  if (nominal.drivetrain != DrivetrainKind::kDifferential ||
+      effect_set(runs.front()) != "track_width")
+    return false;
+  std::vector<double> scales;
+  std::vector<double> sigmas;
+  std::vector<double> radii;
+  for (const FitRun& f : runs) {
+    const FittedEffect& e = f.named.empty() ? f.calibrated.front() : f.named.front();
+    if (e.values.size() != 1 || !(e.sigmas[0] > 0.0) || !std::isfinite(e.sigmas[0])) continue;
+    scales.push_back(e.values[0]);
+    sigmas.push_back(e.sigmas[0]);
+    radii.push_back(f.turn_radius_m);
+  }
+  r.track_by_turn = fit_track_by_turn(scales, sigmas, radii, nominal.differential.track_width_m);
+  const TrackByTurn& t = r.track_by_turn;
+  if (!t.fitted || std::abs(t.radius_difference) < min_z * t.radius_difference_sigma) return false;
+  r.pooled.effects["track_width"]["scale"] = t.track_scale;
+  r.pooled.effects["wheel_radius"]["left_scale"] = 1.0 - t.radius_difference;
+  r.pooled.effects["wheel_radius"]["right_scale"] = 1.0 + t.radius_difference;
+  r.pooled_from.push_back("track_width.scale = " + fmt(t.track_scale, 6) + " +- " +
+                          fmt(t.track_scale_sigma, 2) + " and wheel_radius right/left = 1 +- " +
+                          fmt(t.radius_difference, 3) + " (+- " +
+                          fmt(t.radius_difference_sigma, 2) + "), from the tracks of " +
+                          runs_text(t.runs) + " against the radius each turned at (chi^2 " +
+                          fmt(t.chi_square, 3) + " for " + std::to_string(t.runs - 2) +
+                          " dof; one track for all: " + fmt(t.chi_square_one_track, 3) + ")");
+  return true;
+}
+
 // The model fitted on all the runs. Each run fitted its effects beside each other, so a
 // parameter is pooled only over runs that fixed the same set: a track fitted alone holds what
 // wheel radii would take beside it, and the two pooled from different runs would count it
-// twice. The set most runs fixed (two at least), each parameter at its weighted mean.
-void pool(const RobotModel& nominal, CrossRunResult& r) {
+// twice. The set most runs fixed (two at least), each parameter at its weighted mean, or a
+// track with the radius difference that runs turning both ways show.
+void pool(const RobotModel& nominal, double min_z, CrossRunResult& r) {
   r.pooled = nominal;
   std::map<std::string, std::vector<FitRun>> by_set;
   for (const FitRun& f : r.fits) {
@@ -126,6 +161,7 @@ void pool(const RobotModel& nominal, CrossRunResult& r) {
   if (best == nullptr || best->size() < 2 ||
       effect_set(best->front()).find("limits") != std::string::npos)
     return;
+  if (pool_track_by_turn(nominal, *best, min_z, r)) return;
   for (const ParameterAgreement& a : agreement_of(*best)) {
     const std::size_t dot = a.name.find('.');
     r.pooled.effects[a.name.substr(0, dot)][a.name.substr(dot + 1)] = a.weighted_mean;
@@ -197,6 +233,7 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
     f.calibrated = fitted.sensor.calibrated;
     f.truth = truth_nuisance_lines(fitted);
     f.fitted = fitted.sensor.verdict != Verdict::kUnexplained ? fitted.sensor.augmented : nominal;
+    f.turn_radius_m = turn_radius_m(nominal, runs[i], options.window_s);
     const bool changed = !f.named.empty() || !f.calibrated.empty();
     if (f.verdict == Verdict::kUnexplained) ++result.unexplained;
     if (f.verdict == Verdict::kNamed) ++result.named;
@@ -228,7 +265,7 @@ CrossRunResult cross_validate(const RobotModel& nominal, const std::vector<RunDa
   result.median_nominal_rms_m = median(nominal_named);
   result.median_fitted_rms_m = median(fitted_named);
   result.agreement = agreement_of(result.fits);
-  pool(nominal, result);
+  pool(nominal, options.question.min_z_calibrate, result);
   return result;
 }
 
@@ -273,6 +310,7 @@ nlohmann::json fit_run_json(const FitRun& f) {
           {"named", effects_json(f.named)},
           {"calibrated", effects_json(f.calibrated)},
           {"motion_capture", f.truth},
+          {"turn_radius_m", std::isfinite(f.turn_radius_m) ? json(f.turn_radius_m) : json(nullptr)},
           {"median_ratio", median(f.ratio)},
           {"others", others}};
 }
@@ -312,6 +350,16 @@ nlohmann::json cross_run_json(const CrossRunResult& r, const RobotModel& nominal
   }
   j["agreement"] = agreement;
   j["pooled"] = {{"from", r.pooled_from}, {"left_out", r.pooled_left_out}};
+  if (r.track_by_turn.fitted) {
+    const TrackByTurn& t = r.track_by_turn;
+    j["track_by_turn"] = {{"track_scale", t.track_scale},
+                          {"track_scale_sigma", t.track_scale_sigma},
+                          {"radius_difference", t.radius_difference},
+                          {"radius_difference_sigma", t.radius_difference_sigma},
+                          {"chi_square", t.chi_square},
+                          {"chi_square_one_track", t.chi_square_one_track},
+                          {"runs", t.runs}};
+  }
   return j;
 }
 

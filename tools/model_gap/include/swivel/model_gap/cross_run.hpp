@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "swivel/model_gap/run_data.hpp"
+#include "swivel/model_gap/track_by_turn.hpp"
 #include "swivel/model_gap/workflow.hpp"
 #include "swivel/robot_model.hpp"
 
@@ -47,6 +48,8 @@ struct FitRun {
   std::vector<FittedEffect> calibrated;  ///< sensor to pose, when it named nothing
   std::vector<std::string> truth;        ///< its motion-capture nuisances, in words
   RobotModel fitted;                     ///< the nominal model with what it named or calibrated
+  /// The radius its turning was done at (turn_radius_m; NaN: not differential or no turning).
+  double turn_radius_m = 0.0;
   /// Per other run: nominal and fitted gap (RMS position), and their ratio fitted / nominal.
   std::vector<std::string> others;
   std::vector<double> nominal_rms_m;
@@ -92,6 +95,11 @@ struct CrossRunResult {
   /// effects, and pooling across sets would count an effect twice), each parameter at its
   /// weighted mean over those runs. Written, folded, as DIR/model_pooled.yaml.
   RobotModel pooled;
+  /// When the pooled set is a track alone, on runs that turned both ways round: the track
+  /// and the left/right radius difference it holds (track_by_turn.hpp). Pooled as such when
+  /// the difference is significant at the calibration's level (QuestionOptions::
+  /// min_z_calibrate); the pooled track is then its s0.
+  TrackByTurn track_by_turn;
   std::vector<std::string> pooled_from;      ///< "track_width.scale = 1.0127 +- 0.00028 (49 runs)"
   std::vector<std::string> pooled_left_out;  ///< "track_width+wheel_radius: 1 run, not the ..."
 };
