@@ -49,6 +49,33 @@ double mean_nearest(const std::vector<double>& t, const std::vector<double>& v, 
   return sum / (b - a);
 }
 
+// Longest step of the robot's limiter in the replay. A command step larger than the limit
+// allows in one step starts its ramp at the beginning of the step it falls in, whenever in
+// that step it came: stepped at the world's sub-step (4-5 ms) the replay's timing would move
+// in jumps of a sub-step, and a fitted command delay would sit on the flats between them.
+constexpr double kLimiterStepS = 0.0005;
+
+// The limiter's output averaged over [t0, t0 + h], stepped at kLimiterStepS on the mean of
+// the logged commands over each step.
+Twist2 limited_mean(motion::TwistLimiter& limiter, const RunData& run, double t0, double h,
+                    std::size_t& hint) {
+  const auto steps = static_cast<int>(std::max(1.0, std::ceil(h / kLimiterStepS - 1e-9)));
+  const double u = h / steps;
+  Twist2 sum{0.0, 0.0, 0.0};
+  for (int m = 0; m < steps; ++m) {
+    const double a = t0 + m * u;
+    std::size_t first = hint;
+    const Twist2 cmd{mean_nearest(run.t_s, run.cmd_vx_mps, a, a + u, first),
+                     mean_nearest(run.t_s, run.cmd_vy_mps, a, a + u, first),
+                     mean_nearest(run.t_s, run.cmd_wz_radps, a, a + u, hint)};
+    const Twist2 out = limiter.step(cmd, u);
+    sum.vx_mps += out.vx_mps;
+    sum.vy_mps += out.vy_mps;
+    sum.wz_radps += out.wz_radps;
+  }
+  return Twist2{sum.vx_mps / steps, sum.vy_mps / steps, sum.wz_radps / steps};
+}
+
 // Growth factor (e-folds) of a leading caster's angle error over a window beyond which the
 // window is not compared.
 constexpr double kMaxSwingGrowth = 0.5;
@@ -203,20 +230,14 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
     const auto substeps = static_cast<int>(std::max(1.0, std::ceil(dt / max_substep - 1e-9)));
     const double h = dt / substeps;
     for (int s = 0; s < substeps; ++s) {
-      // The commands of the sub-step: their mean over it, so that the replay moves smoothly
-      // with the fitted timing.
       const double t0 = run.t_s[k - 1] + s * h - command_delay_s;
-      std::size_t hint = cmd_hint;
-      const Twist2 cmd{mean_nearest(run.t_s, run.cmd_vx_mps, t0, t0 + h, hint),
-                       mean_nearest(run.t_s, run.cmd_vy_mps, t0, t0 + h, hint),
-                       mean_nearest(run.t_s, run.cmd_wz_radps, t0, t0 + h, cmd_hint)};
       // The controller steers from the angles its encoders show (late by any sensor
       // latency), at its own rate.
       if (swpc_) {
         for (std::size_t i = 0; i < modules_; ++i)
           measured.steer_angle_rad[i] = world.steer_reading_rad(i);
       }
-      const Twist2 limited = limiter.step(cmd, h);
+      const Twist2 limited = limited_mean(limiter, run, t0, h, cmd_hint);
       controller.velocity(limited, measured, command);
       if (swpc_) follow_logged_branch(plant, limited, run, k, measured, command);
       if (world.step(h, command) != Status::kOk) return false;
