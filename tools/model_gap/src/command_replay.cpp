@@ -59,6 +59,16 @@ constexpr double kLimiterStepS = 0.0005;
 // the logged commands over each step.
 Twist2 limited_mean(motion::TwistLimiter& limiter, const RunData& run, double t0, double h,
                     std::size_t& hint) {
+  // Settled on a command that holds over the sub-step (most of a run): every step would
+  // leave it there.
+  std::size_t whole_hint = hint;
+  const Twist2 whole{mean_nearest(run.t_s, run.cmd_vx_mps, t0, t0 + h, whole_hint),
+                     mean_nearest(run.t_s, run.cmd_vy_mps, t0, t0 + h, whole_hint),
+                     mean_nearest(run.t_s, run.cmd_wz_radps, t0, t0 + h, whole_hint)};
+  const Twist2 now = limiter.value();
+  if (whole.vx_mps == now.vx_mps && whole.vy_mps == now.vy_mps && whole.wz_radps == now.wz_radps) {
+    return now;
+  }
   const auto steps = static_cast<int>(std::max(1.0, std::ceil(h / kLimiterStepS - 1e-9)));
   const double u = h / steps;
   Twist2 sum{0.0, 0.0, 0.0};
@@ -176,6 +186,10 @@ CommandReplay::CommandReplay(const RobotModel& nominal, const RunData& run,
     }
   }
   compared_ = swing_free_windows(nominal, run, *windows_, path);
+  reseat_.assign(run.size(), 0);
+  for (std::size_t j = 1; swpc_ && j < compared_.size(); ++j) {
+    if (compared_[j] != 0 && compared_[j - 1] == 0) reseat_[(*windows_)[j].a] = 1;
+  }
 }
 
 bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
@@ -248,6 +262,12 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
       for (std::size_t i = 0; i < modules_; ++i) {
         // As the log's angles are: late by any sensor latency.
         track.steer[i][k] = world.sensed_steer_rad(i) - start[i];
+        // A window compared after a swing that was not starts where the log's caster is:
+        // where a swing left the replay's is not what the window asks.
+        if (reseat_[k] != 0) {
+          const double logged = run.steer_rad[i][k] + plant.modules[i].steering_offset_rad;
+          world.turn_steering(i, wrap_pi(logged - world.sensed_steer_rad(i)));
+        }
       }
     }
   }

@@ -81,5 +81,16 @@ TEST(CommandTiming, CleanCasterRobotsNameNoAccelerationLimit) {
   }
 }
 
+// Smoke-range clean hex6 runs whose command question was "unexplained" by a steering jump of
+// 84 and 9 sigma in the first window compared after a swing.
+TEST(CasterSwing, TheWindowAfterASwingStartsWhereTheLogsCastersAre) {
+  for (const std::size_t index : {20U, 68U}) {
+    const CleanRun clean = clean_hex6(index);
+    const GapResult r = analyse_gap(clean.model, clean.run);
+    EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
+        << "index " << index << ": " << r.command.summary;
+  }
+}
+
 }  // namespace
 }  // namespace swivel::model_gap

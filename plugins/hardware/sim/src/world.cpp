@@ -415,6 +415,14 @@ double World::sensed_steer_rad(std::size_t i) const noexcept {
   return s.phi_rad[i];
 }
 
+void World::turn_steering(std::size_t i, double delta_rad) noexcept {
+  if (i >= n_ || !std::isfinite(delta_rad)) return;
+  modules_[i].phi_rad += delta_rad;
+  for (std::size_t k = 0; k < history_size_; ++k) {
+    history_[(history_head_ + k) % history_.size()].phi_rad[i] += delta_rad;
+  }
+}
+
 void World::read(HardwareState& out) noexcept {
   SensorSample s;
   sensor_sample_at(t_s_ - plant_.sensor_delay_s, s);

@@ -379,3 +379,37 @@ TEST(OpenLoop, SteeringRatesAreClampedToTheRobotsLimit) {
 
 }  // namespace
 }  // namespace swivel::sim
+
+namespace swivel::sim {
+namespace {
+
+// Turning a module's steering moves its angle now and as the latency reads it (the history
+// turns with it), and leaves the other modules alone.
+TEST(World, TurningTheSteeringMovesItNowAndInTheLateView) {
+  RobotModel model = swpc4();
+  model.effects["sensor_latency"]["delay_s"] = 0.02;
+  SimOptions options = quiet(false);
+  options.move_body = false;
+  World world(model, options);
+  const OpenLoopController controller(model);
+  HardwareState hw;
+  ActuatorCommand command;
+  for (int k = 0; k < 20; ++k) {
+    world.read(hw);
+    controller.velocity(Twist2{0.2, 0.0, 0.4}, hw, command);
+    world.step(0.01, command);
+  }
+  const double true_before = world.true_steer_rad(1);
+  const double sensed_before = world.sensed_steer_rad(1);
+  const double other = world.sensed_steer_rad(2);
+  world.turn_steering(1, 0.3);
+  EXPECT_DOUBLE_EQ(world.true_steer_rad(1), true_before + 0.3);
+  EXPECT_NEAR(world.sensed_steer_rad(1), sensed_before + 0.3, 1e-12);
+  EXPECT_DOUBLE_EQ(world.sensed_steer_rad(2), other);
+  world.turn_steering(7, 0.3);  // no such module: nothing happens
+  world.turn_steering(1, std::nan(""));
+  EXPECT_DOUBLE_EQ(world.true_steer_rad(1), true_before + 0.3);
+}
+
+}  // namespace
+}  // namespace swivel::sim

@@ -91,6 +91,7 @@ class CommandReplay {
   std::size_t modules_ = 2;
   double row_period_s_ = 0.01;
   std::vector<char> compared_;
+  std::vector<char> reseat_;  ///< per row: casters re-seated on the log's angles after it
   std::vector<ChannelInfo> channels_;
   mutable Track track_;
 };

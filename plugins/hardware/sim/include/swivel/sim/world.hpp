@@ -98,6 +98,9 @@ class World {
   /// Real-time safe. True steering angle of module i as the sensors see it now: late by the
   /// sensor latency, unwrapped, without offset or quantization, rad.
   [[nodiscard]] double sensed_steer_rad(std::size_t i) const noexcept;
+  /// Real-time safe. Turns module i's steering by `delta_rad`, now and in the history the
+  /// sensor latency reads: for a replay that re-seats a caster on where a log shows it.
+  void turn_steering(std::size_t i, double delta_rad) noexcept;
   /// True steering rate of module i over the last sub-step, rad/s.
   [[nodiscard]] double true_steer_rate_radps(std::size_t i) const noexcept {
     return modules_[i].steer_rate_radps;
