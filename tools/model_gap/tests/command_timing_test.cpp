@@ -70,26 +70,26 @@ TEST(CommandTiming, TheReplayMovesWithTheCommandDelayAndIsBestWhereTheRobotWas) 
   }
 }
 
+// The command question on a clean smoke-range hex6 run: no significant gap.
+GapResult expect_no_command_gap(std::size_t index) {
+  const CleanRun clean = clean_hex6(index);
+  GapResult r = analyse_gap(clean.model, clean.run);
+  EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
+      << "index " << index << ": " << r.command.summary;
+  return r;
+}
+
 // Runs on which the command question once named an acceleration limit at 7.6 and 8.5 sigma.
 TEST(CommandTiming, CleanCasterRobotsNameNoAccelerationLimit) {
   for (const std::size_t index : {74U, 80U}) {
-    const CleanRun clean = clean_hex6(index);
-    const GapResult r = analyse_gap(clean.model, clean.run);
-    EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
-        << "index " << index << ": " << r.command.summary;
-    EXPECT_LT(std::abs(r.command_delay_s), 0.001) << "index " << index;
+    EXPECT_LT(std::abs(expect_no_command_gap(index).command_delay_s), 0.001) << "index " << index;
   }
 }
 
 // Smoke-range clean hex6 runs whose command question was "unexplained" by a steering jump of
 // 84 and 9 sigma in the first window compared after a swing.
 TEST(CasterSwing, TheWindowAfterASwingStartsWhereTheLogsCastersAre) {
-  for (const std::size_t index : {20U, 68U}) {
-    const CleanRun clean = clean_hex6(index);
-    const GapResult r = analyse_gap(clean.model, clean.run);
-    EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
-        << "index " << index << ": " << r.command.summary;
-  }
+  for (const std::size_t index : {20U, 68U}) (void)expect_no_command_gap(index);
 }
 
 }  // namespace
