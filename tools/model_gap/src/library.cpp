@@ -64,10 +64,13 @@ void add_limit(Candidate& c, RobotModel model, const std::string& key, double pe
   s.upper = 100.0;
   const double identity = stated->has_value() ? 1.0 / **stated : 0.0;
   s.anchor = identity;
-  if (stated->has_value()) {
+  // A fit started at a limit the run never reaches cannot move (nothing depends on it):
+  // start where it would act, a little below the run's peak, unless the stated limit does.
+  const bool stated_acts = stated->has_value() && !(peak > 0.0 && **stated > peak);
+  if (stated_acts) {
     s.initial = identity;
   } else {
-    s.initial = peak > 0.0 ? 1.0 / (0.9 * peak) : scale;
+    s.initial = peak > 0.0 ? 1.0 / (0.9 * peak) : stated->has_value() ? identity : scale;
   }
   c.keys.push_back(key);
   c.params.push_back(s);

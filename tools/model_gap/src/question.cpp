@@ -62,14 +62,29 @@ void fit_nominal_nuisance(QuestionState& s, const QuestionOptions& options) {
   s.eval.set_nuisance(nominal.values);
 }
 
+// `effects` fitted with the nuisance beside them, started from where the nuisance is now and
+// from its initial value; the better fit of the two. The nominal model's nuisance may have
+// taken up what the effects explain (a command delay fitted without an acceleration limit
+// takes up the limiter's lag, to its one-row bound on a robot limited all run), and a joint
+// fit started there stays in that valley with the effect's value off to make up for it.
+FitOutcome fit_beside_nuisance(const QuestionState& s, const std::vector<const Candidate*>& effects,
+                               const std::vector<double>& values, const QuestionOptions& options) {
+  FitOutcome here =
+      fit(s.eval.problem(effects, true),
+          specs_of(effects, values, s.replay.nuisance, s.eval.nuisance()), options.fit);
+  const std::vector<double> nuisance_start = initial_nuisance(s.replay);
+  if (nuisance_start == s.eval.nuisance()) return here;
+  FitOutcome fresh = fit(s.eval.problem(effects, true),
+                         specs_of(effects, values, s.replay.nuisance, nuisance_start), options.fit);
+  if (fresh.ok && (!here.ok || fresh.rss < here.rss)) return fresh;
+  return here;
+}
+
 // The chosen single effect scored with the nuisance refitted beside it (a command timing
 // fitted without a lag is not the one with); the nuisance stays there.
 void refit_chosen_nuisance(QuestionState& s, const QuestionOptions& options) {
   const Fitted& chosen = *s.chosen;
-  const FitOutcome joint =
-      fit(s.eval.problem(chosen.effects, true),
-          specs_of(chosen.effects, chosen.fit.values, s.replay.nuisance, s.eval.nuisance()),
-          options.fit);
+  const FitOutcome joint = fit_beside_nuisance(s, chosen.effects, chosen.fit.values, options);
   if (!joint.ok) return;
   const auto p = static_cast<std::ptrdiff_t>(param_count(chosen.effects));
   s.eval.set_nuisance(std::vector<double>(joint.values.begin() + p, joint.values.end()));
@@ -247,27 +262,87 @@ void select_effects(QuestionState& s, const std::vector<Candidate>& library,
   if (s.chosen != nullptr && options.max_effects >= 2) second_effect(s, library, options);
 }
 
+namespace {
+
+// The selection refitted, its nuisance started at `nuisance_start`, with the noise its
+// residuals show from there; -2 log likelihood of the rows (Gaussian, with that noise) to
+// compare it with a start whose noise differs.
+struct Refit {
+  NoiseModel noise;
+  std::vector<double> sigma;
+  FitOutcome fit;
+  double neg2_log_likelihood = kInf;
+};
+
+Refit refit_from(QuestionState& s, const std::vector<const Candidate*>& selected,
+                 const std::vector<double>& values, const std::vector<double>& nuisance_start,
+                 const QuestionOptions& options) {
+  std::vector<double> start = values;
+  if (nuisance_start != s.eval.nuisance()) {
+    // The effects' values were fitted beside another nuisance: fitted again at this one
+    // first, so that the noise is measured where this start is.
+    s.eval.set_nuisance(nuisance_start);
+    const FitOutcome moved =
+        fit(s.eval.problem(selected, false), specs_of(selected, values, {}, {}), options.fit);
+    if (moved.ok) start = moved.values;
+  }
+  if (!selected.empty() && s.replay.known_variance_of) {
+    s.replay.known_variance =
+        s.replay.known_variance_of(s.eval.model_with(selected, start), nuisance_start);
+  }
+  std::vector<double> raw;
+  if (s.eval.evaluate(selected, start, false, raw, false)) measure_noise(s, raw);
+  Refit r;
+  r.fit = !selected.empty() || !s.replay.nuisance.empty()
+              ? fit(s.eval.problem(selected, true),
+                    specs_of(selected, start, s.replay.nuisance, nuisance_start), options.fit)
+              : score(s.eval.problem({}, false), {});
+  r.noise = s.noise;
+  r.sigma = s.eval.sigma();
+  if (!r.fit.ok) return r;
+  r.neg2_log_likelihood = 0.0;
+  for (std::size_t k = 0; k < r.fit.residuals.size() && k < r.sigma.size(); ++k) {
+    const double e = r.fit.residuals[k];
+    if (std::isfinite(e)) r.neg2_log_likelihood += e * e + 2.0 * std::log(r.sigma[k]);
+  }
+  return r;
+}
+
+}  // namespace
+
+// The selection refitted with the noise it leaves, its nuisance free. Started where the
+// nominal model left the nuisance and, with an effect selected, also at the nuisance's initial
+// value when that is elsewhere: the nominal model's nuisance may have taken up what the
+// effects explain (a command delay fitted without an acceleration limit takes up the
+// limiter's lag, to its one-row bound on a robot limited all run), and a fit started there
+// stays in that valley, the effect's value off to make up for it and the noise measured to
+// suit. Each start with its own noise; the likelier fit is kept.
 void refit_selection(QuestionState& s, const QuestionOptions& options) {
   std::vector<const Candidate*> selected;
   std::vector<double> chosen_values;
   if (s.chosen != nullptr) {
     selected = s.chosen->effects;
     chosen_values = s.chosen->fit.values;
-    if (s.replay.known_variance_of) {
-      s.replay.known_variance =
-          s.replay.known_variance_of(s.eval.model_with(selected, chosen_values), s.eval.nuisance());
+  }
+  const std::vector<double> here = s.eval.nuisance();
+  const std::vector<double> initial = initial_nuisance(s.replay);
+  Refit best = refit_from(s, selected, chosen_values, here, options);
+  if (!selected.empty() && initial != here) {
+    Refit other = refit_from(s, selected, chosen_values, initial, options);
+    if (other.neg2_log_likelihood < best.neg2_log_likelihood) {
+      best = std::move(other);
+    } else {  // the evaluator back where the kept fit started
+      s.eval.set_nuisance(here);
+      if (s.replay.known_variance_of) {  // selected is not empty here
+        s.replay.known_variance =
+            s.replay.known_variance_of(s.eval.model_with(selected, chosen_values), here);
+      }
     }
   }
-  std::vector<double> raw;
-  if (s.eval.evaluate(selected, chosen_values, false, raw, false)) measure_noise(s, raw);
+  s.noise = best.noise;
+  s.eval.set_sigma(best.sigma);
   s.final.effects = selected;
-  if (!selected.empty() || !s.replay.nuisance.empty()) {
-    s.final.fit =
-        fit(s.eval.problem(selected, true),
-            specs_of(selected, chosen_values, s.replay.nuisance, s.eval.nuisance()), options.fit);
-  } else {
-    s.final.fit = score(s.eval.problem({}, false), {});
-  }
+  s.final.fit = std::move(best.fit);
   if (s.chosen != nullptr) {
     s.final.z = s.chosen->z;  // significance as selected
     s.final.size = s.chosen->size;

@@ -236,6 +236,20 @@ MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<doubl
   return m;
 }
 
+namespace {
+
+// Whether a nuisance parameter sits on (within a thousandth of its range of) a bound.
+bool nuisance_at_bound(const std::vector<ParamSpec>& specs, const std::vector<double>& values) {
+  for (std::size_t k = 0; k < std::min(specs.size(), values.size()); ++k) {
+    const ParamSpec& p = specs[k];
+    const double margin = 1e-3 * (p.upper - p.lower);
+    if (values[k] <= p.lower + margin || values[k] >= p.upper - margin) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
                const std::vector<double>& initial, const QuestionOptions& options) {
   Fitted f;
@@ -250,6 +264,19 @@ Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
   } else {
     f.fit =
         fit(s.eval.problem(f.effects, false), specs_of(f.effects, initial, {}, {}), options.fit);
+    if (nuisance_at_bound(s.replay.nuisance, s.eval.nuisance())) {
+      // The nominal model pushed its nuisance to a bound: it is taking up something else
+      // (a command delay, the lag of a limiter the model lacks), and the effect fitted
+      // beside it would make up for the rest. The effect fitted at the nuisance's initial
+      // value instead, when that fits better.
+      Evaluator at_initial = s.eval;
+      std::vector<double> start;
+      for (const ParamSpec& p : s.replay.nuisance) start.push_back(p.initial);
+      at_initial.set_nuisance(std::move(start));
+      const FitOutcome other = fit(at_initial.problem(f.effects, false),
+                                   specs_of(f.effects, initial, {}, {}), options.fit);
+      if (other.ok && (!f.fit.ok || other.rss < f.fit.rss)) f.fit = other;
+    }
   }
   return f;
 }
