@@ -128,13 +128,14 @@ bool pool_track_by_turn(const RobotModel& nominal, const std::vector<FitRun>& ru
   r.pooled.effects["track_width"]["scale"] = t.track_scale;
   r.pooled.effects["wheel_radius"]["left_scale"] = 1.0 - t.radius_difference;
   r.pooled.effects["wheel_radius"]["right_scale"] = 1.0 + t.radius_difference;
-  r.pooled_from.push_back("track_width.scale = " + fmt(t.track_scale, 6) + " +- " +
-                          fmt(t.track_scale_sigma, 2) + " and wheel_radius right/left = 1 +- " +
-                          fmt(t.radius_difference, 3) + " (+- " +
-                          fmt(t.radius_difference_sigma, 2) + "), from the tracks of " +
-                          runs_text(t.runs) + " against the radius each turned at (chi^2 " +
-                          fmt(t.chi_square, 3) + " for " + std::to_string(t.runs - 2) +
-                          " dof; one track for all: " + fmt(t.chi_square_one_track, 3) + ")");
+  r.pooled_from.push_back(
+      "track_width.scale = " + fmt(t.track_scale, 6) + " +- " + fmt(t.track_scale_sigma, 2) +
+      " and wheel_radius right " + fmt(1.0 + t.radius_difference, 6) + ", left " +
+      fmt(1.0 - t.radius_difference, 6) + " (1 +- e, e = " + fmt(t.radius_difference, 3) + " +- " +
+      fmt(t.radius_difference_sigma, 2) + "), from the tracks of " + runs_text(t.runs) +
+      " against the radius each turned at (chi^2 " + fmt(t.chi_square, 3) + " for " +
+      std::to_string(t.runs - 2) + " dof; one track for all: " + fmt(t.chi_square_one_track, 3) +
+      ")");
   return true;
 }
 
