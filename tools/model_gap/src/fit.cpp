@@ -620,6 +620,7 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
   };
   if (have_jacobian) {
     dense = dense_jacobian(jac, p);
+    const std::vector<double> optimum = z;
     anchor_uninformed(dense, jac.num_rows, specs, scale_free, z);
     // Along a combination the run hardly fixes the solver can drift far down a flat valley;
     // where the model is not linear in it (ParamSpec::hold_when_unfixed), putting that
@@ -627,8 +628,15 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
     // more than the noise. Solve again from there with it held at its anchors.
     const bool may_hold = std::any_of(specs.begin(), specs.end(),
                                       [](const ParamSpec& s) { return s.hold_when_unfixed; });
-    const FitOutcome anchored = may_hold ? score(problem, theta_of()) : FitOutcome{};
-    if (anchored.ok && anchored.rss > 2.0 * summary.final_cost + 1.0) {
+    const bool moved = z != optimum;
+    const FitOutcome anchored = moved ? score(problem, theta_of()) : FitOutcome{};
+    const bool off_valley = anchored.ok && anchored.rss > 2.0 * summary.final_cost + 1.0;
+    if (off_valley && !may_hold) {
+      // Not a flat valley: the fit depends on that combination where the optimum's slope
+      // says it barely does (a limit that acts at a few command steps, against a command
+      // delay at its bound). The optimum stands; the combination's sigma stays infinite.
+      z = optimum;
+    } else if (off_valley) {
       solver_problem.AddResidualBlock(hold_uninformed(dense, jac.num_rows, specs, scale_free),
                                       nullptr, z.data());
       ceres::Solve(solver_options_of(options), &solver_problem, &summary);

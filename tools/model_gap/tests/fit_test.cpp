@@ -164,6 +164,42 @@ TEST(FitTest, ACombinationNotFixedIsHeldAtItsAnchorsWhereTheModelIsNotLinear) {
   EXPECT_LT(std::abs(f.values[1] - 1.0), 0.05);
 }
 
+// A parameter whose effect saturates (as a limit the run reaches at a few steps does): at the
+// optimum the rows hardly depend on it, so the slope calls it unfixed, yet at its anchor the
+// rows are far off. It is not a flat valley, and the optimum stands.
+TEST(FitTest, AParameterTheSlopeCallsUnfixedStaysWhereTheAnchorWouldBreakTheFit) {
+  constexpr double kSigma = 0.01;
+  constexpr std::size_t kRows = 200;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<double> x;
+  std::vector<double> y;
+  for (std::size_t k = 0; k < kRows; ++k) {
+    x.push_back(0.01 * static_cast<double>(k));
+    y.push_back(2.0 * x.back() + std::tanh(12.0) + kSigma * gauss(rng));
+  }
+  FitProblem p;
+  p.row_count = kRows;
+  p.window_count = kRows;
+  for (std::size_t k = 0; k < kRows; ++k) p.row_window.push_back(k);
+  p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
+    r.resize(kRows);
+    for (std::size_t k = 0; k < kRows; ++k)
+      r[k] = (y[k] - th[0] * x[k] - std::tanh(th[1])) / kSigma;
+    return true;
+  };
+  ParamSpec slope{"a", 1.0, 1.0, -10.0, 10.0};
+  ParamSpec saturating{"b", 3.0, 1.0, 0.0, 20.0};
+  saturating.anchor = 0.0;  // the model's own value: no effect at all
+  const FitOutcome f = fit(p, {slope, saturating});
+  ASSERT_TRUE(f.ok);
+  EXPECT_FALSE(f.observable[1]);  // the slope at the optimum is below what counts as fixed
+  EXPECT_GT(f.values[1],
+            3.0);  // not at its anchor, where tanh(b) = 0 leaves the rows 100 sigma off
+  EXPECT_LT(f.rss, 2.0 * static_cast<double>(kRows));
+  EXPECT_NEAR(f.values[0], 2.0, 3.0 * f.sigmas[0]);
+}
+
 TEST(FitTest, ChiSquareAsANormalDeviate) {
   // One degree of freedom: the deviate itself.
   for (double z : {0.5, 1.0, 3.0, 5.0, 12.0, 40.0})
