@@ -351,8 +351,9 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   EXPECT_LE(low, 25.0);
   EXPECT_GE(high, 95.0);
   EXPECT_EQ(effects.size(), 11U);
-  // The smoke set and the first validation set (development data now) are other ranges.
-  for (const SeedRanges& other : {kSmokeSeeds, kFirstValidationSeeds}) {
+  // The smoke set and the earlier validation sets (development data now) are other ranges.
+  for (const SeedRanges& other :
+       {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;

@@ -74,9 +74,10 @@ int run(int argc, char** argv) {
   app.add_option("--index", index, "with --case: its index");
   app.add_option("--seeds", seeds,
                  "with --case: its seed ranges, smoke (default), validation (do not look at "
-                 "those while developing) or first-validation (the first validation set, "
-                 "development data now)")
-      ->check(CLI::IsMember({"smoke", "validation", "first-validation"}));
+                 "those while developing), first-validation, second-validation or "
+                 "third-validation (the earlier validation sets, development data now)")
+      ->check(CLI::IsMember(
+          {"smoke", "validation", "first-validation", "second-validation", "third-validation"}));
   app.add_option("--out", out, "run log (CSV)")->required();
   app.add_option("--model-out", model_out, "nominal model (YAML)");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;
@@ -86,9 +87,11 @@ int run(int argc, char** argv) {
   try {
     if (!case_kind.empty()) {
       ValidationCase c;
-      const SeedRanges& ranges = seeds == "validation"         ? kValidationSeeds
-                                 : seeds == "first-validation" ? kFirstValidationSeeds
-                                                               : kSmokeSeeds;
+      const SeedRanges& ranges = seeds == "validation"          ? kValidationSeeds
+                                 : seeds == "first-validation"  ? kFirstValidationSeeds
+                                 : seeds == "second-validation" ? kSecondValidationSeeds
+                                 : seeds == "third-validation"  ? kThirdValidationSeeds
+                                                                : kSmokeSeeds;
       if (case_kind == "clean") {
         c = clean_case(ranges.clean, index);
       } else if (case_kind == "library") {

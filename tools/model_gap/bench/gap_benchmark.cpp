@@ -6,14 +6,15 @@
 //                for comparison and never judged;
 //   validation   runs of the second robot generator (tests/second_robot) drawn from seed
 //                ranges never used while developing (validation_set.hpp: clean
-//                28880001-28880240, library 28890001-28890068, outside 28900001-28900012).
+//                26341837-26342076, library 57381725-57381792, outside 59075466-59075477).
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
-//   first-validation  the same cases from the first validation set's seeds (7340001...), which
-//                were measured after several changes and are development data now: reported
-//                with the targets beside them, never judged (only with --set first-validation).
+//   first-, second-, third-validation  the same cases from the earlier validation sets'
+//                seeds (7340001..., 28880001..., 72548103...), which were looked at after
+//                changes and are development data now: reported with the targets beside
+//                them, never judged (only with --set first-validation etc.).
 //
-//   swivel-bench-model-gap [--set development|validation|first-validation|both] [--quick]
-//                          [--jobs N]
+//   swivel-bench-model-gap [--set development|validation|first-validation|second-validation|
+//                                 third-validation|both] [--quick] [--jobs N]
 //   swivel-bench-model-gap --case ID [--case ID ...]     development cases by id
 //
 // --quick: the battery's representative subset and a few runs of the second generator's
@@ -155,6 +156,24 @@ void print_figure(const char* name, const validation::Proportion& p) {
               100.0 * p.value(), 100.0 * ci.low, 100.0 * ci.high);
 }
 
+// The figures the targets are set on, for each drivetrain on its own: the replays are
+// kinematic, and caster robots (steering servos, scrub while casters turn) are where they
+// fall short.
+void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
+  for (const bool swpc : {false, true}) {
+    std::vector<CaseOutcome> part;
+    for (const CaseOutcome& o : outcomes)
+      if (o.swpc == swpc) part.push_back(o);
+    if (part.empty()) continue;
+    const validation::SetFigures f = validation::figures(part);
+    std::printf("\nFigures, %s robots only:\n", swpc ? "caster (swpc)" : "differential");
+    print_figure("false alarms, either question (clean runs)", f.false_alarm);
+    print_figure("in-library effects named right, within 3 sigma", f.named_right);
+    print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);
+    print_figure("coverage: hidden parameters within 3 sigma", f.within_3_sigma);
+  }
+}
+
 // Under the null (clean runs) a candidate's significance is a normal deviate: the share of
 // candidates at or above each z against the normal's upper tail. Optionally every z with its
 // expected normal quantile, for a quantile plot (tools/lab/null_quantiles.gp).
@@ -222,6 +241,7 @@ bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, 
   print_figure("coverage: hidden parameters within 3 sigma", f.within_3_sigma);
   std::printf("  workflow errors: %zu; CPU per run: mean %.2f s, worst %.2f s\n", f.errors,
               f.mean_cpu_s, f.worst_cpu_s);
+  print_by_drivetrain(outcomes);
   const std::vector<validation::TargetResult> targets = validation::judge_targets(f);
   std::printf("\nTargets (pre-registered; %s):\n",
               judged ? "judged on this set" : "NOT judged on this set, shown for comparison");
@@ -273,6 +293,28 @@ std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCas
   return jobs;
 }
 
+// An earlier validation set (development data now): reported with the targets beside it.
+void report_earlier_set(const std::string& set, unsigned jobs, const std::string& quantiles_path) {
+  namespace sr = swivel::second;
+  const bool first = set == "first-validation";
+  const bool second = set == "second-validation";
+  const sr::SeedRanges& seeds = first    ? sr::kFirstValidationSeeds
+                                : second ? sr::kSecondValidationSeeds
+                                         : sr::kThirdValidationSeeds;
+  const auto cases = sr::validation_set(seeds, sr::kValidationCleanRuns, sr::kValidationLibraryRuns,
+                                        sr::kValidationOutsideRuns);
+  const std::string name = std::string(first    ? "first"
+                                       : second ? "second"
+                                                : "third") +
+                           " validation set";
+  const bool met = report(name +
+                              " (second generator, seeds measured while developing: "
+                              "development data, not judged)",
+                          run_all(set, validation_jobs(cases), jobs), false, quantiles_path);
+  std::printf("\nthe targets on the %s: %s (not judged)\n", name.c_str(),
+              met ? "all met" : "missed");
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"The model-gap workflow on development and validation runs, with targets"};
   std::string set = "both";
@@ -281,8 +323,10 @@ int run(int argc, char** argv) {
   bool subset = false;
   unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::string> ids;
-  app.add_option("--set", set, "development, validation, first-validation or both")
-      ->check(CLI::IsMember({"development", "validation", "first-validation", "both"}));
+  app.add_option("--set", set,
+                 "development, validation, first-, second- or third-validation, or both")
+      ->check(CLI::IsMember({"development", "validation", "first-validation", "second-validation",
+                             "third-validation", "both"}));
   app.add_flag("--quick", quick,
                "smoke test: the battery's subset and a few smoke-range runs; nothing judged");
   app.add_option("--jobs", jobs, "parallel runs (default: the hardware's threads)")
@@ -320,15 +364,8 @@ int run(int argc, char** argv) {
   std::printf("swivel-bench-model-gap --set %s%s --jobs %u\n", set.c_str(), quick ? " --quick" : "",
               jobs);
   namespace sr = swivel::second;
-  if (set == "first-validation") {
-    const auto cases = sr::validation_set(sr::kFirstValidationSeeds, sr::kValidationCleanRuns,
-                                          sr::kValidationLibraryRuns, sr::kValidationOutsideRuns);
-    const bool met = report(
-        "first validation set (second generator, seeds measured while "
-        "developing: development data, not judged)",
-        run_all("first-validation", validation_jobs(cases), jobs), false, quantiles_path);
-    std::printf("\nthe targets on the first validation set: %s (not judged)\n",
-                met ? "all met" : "missed");
+  if (set == "first-validation" || set == "second-validation" || set == "third-validation") {
+    report_earlier_set(set, jobs, quantiles_path);
     return 0;
   }
   if (set != "validation") {

@@ -37,11 +37,18 @@ struct SeedRanges {
   std::uint64_t outside = 0;
 };
 
-// The validation set: seeds drawn at random on 2026-11-27 and never used while developing.
-inline constexpr SeedRanges kValidationSeeds{28880001, 28890001, 28900001};
+// The validation set: seeds drawn at random on 2026-11-27 (the third draw that day) and
+// never used while developing.
+inline constexpr SeedRanges kValidationSeeds{26341837, 57381725, 59075466};
 // The first validation set (2026-11-26). It was measured again after each of several changes
 // of the workflow on 2026-11-27, so it is development data now: reported, never judged.
 inline constexpr SeedRanges kFirstValidationSeeds{7340001, 7350001, 7360001};
+// The second validation set (drawn on 2026-11-27), looked at three times that day after
+// changes found on other runs: development data now, like the first.
+inline constexpr SeedRanges kSecondValidationSeeds{28880001, 28890001, 28900001};
+// The third (drawn on 2026-11-27): measured once, then one of its runs showed a fault of the
+// fit that was fixed: development data now.
+inline constexpr SeedRanges kThirdValidationSeeds{72548103, 11811626, 78109134};
 // Smoke seeds (tests, --quick): a range of their own, so that looking at them reveals nothing
 // of the validation runs.
 inline constexpr SeedRanges kSmokeSeeds{5001, 6001, 6501};
