@@ -630,13 +630,16 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
                                       [](const ParamSpec& s) { return s.hold_when_unfixed; });
     const bool moved = z != optimum;
     const FitOutcome anchored = moved ? score(problem, theta_of()) : FitOutcome{};
-    const bool off_valley = anchored.ok && anchored.rss > 2.0 * summary.final_cost + 1.0;
-    if (off_valley && !may_hold) {
-      // Not a flat valley: the fit depends on that combination where the optimum's slope
-      // says it barely does (a limit that acts at a few command steps, against a command
-      // delay at its bound). The optimum stands; the combination's sigma stays infinite.
+    const double optimum_rss = 2.0 * summary.final_cost;  // Ceres' cost is half of it
+    const bool off_valley = anchored.ok && anchored.rss > optimum_rss + 1.0;
+    if (off_valley && !may_hold && anchored.rss > 2.0 * optimum_rss) {
+      // Not a valley at all: at its anchors the fit is off by more than its whole noise, yet
+      // the optimum's slope says the combination barely matters (a limit that acts at a few
+      // command steps, beside a command delay at its bound). The optimum stands; the
+      // combination's sigma stays infinite. (A weakly fixed combination that drifted costs
+      // less than that at its anchors and goes back there.)
       z = optimum;
-    } else if (off_valley) {
+    } else if (off_valley && may_hold) {
       solver_problem.AddResidualBlock(hold_uninformed(dense, jac.num_rows, specs, scale_free),
                                       nullptr, z.data());
       ceres::Solve(solver_options_of(options), &solver_problem, &summary);

@@ -200,6 +200,40 @@ TEST(FitTest, AParameterTheSlopeCallsUnfixedStaysWhereTheAnchorWouldBreakTheFit)
   EXPECT_NEAR(f.values[0], 2.0, 3.0 * f.sigmas[0]);
 }
 
+// A combination the rows barely fix, pulled away by one weak row: at its anchor the fit is a
+// few units worse, far less than its whole noise. That is a weakly fixed combination, not a
+// saturated one, and it goes back to its anchor (a run's weakest wheel-radius combination
+// must not carry a significance it does not have).
+TEST(FitTest, AWeaklyFixedCombinationThatDriftedGoesBackToItsAnchor) {
+  constexpr double kSigma = 1e-3;
+  constexpr std::size_t kRows = 200;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<double> x;
+  std::vector<double> y;
+  for (std::size_t k = 0; k < kRows; ++k) {
+    x.push_back(1.0 + 0.5 * std::sin(0.1 * static_cast<double>(k)));
+    y.push_back(2.0 * x.back() + kSigma * gauss(rng));
+  }
+  FitProblem p;
+  p.row_count = kRows + 1;
+  p.window_count = kRows + 1;
+  for (std::size_t k = 0; k <= kRows; ++k) p.row_window.push_back(k);
+  p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
+    r.resize(kRows + 1);
+    for (std::size_t k = 0; k < kRows; ++k) r[k] = (y[k] - th[0] * x[k]) / kSigma;
+    r[kRows] = 10.0 * (th[1] - 1.3);  // information 100, against about 2.5e8 for a
+    return true;
+  };
+  const FitOutcome f = fit(p, {{"a", 1.0, 1.0, -10.0, 10.0}, {"b", 1.0, 1.0, 0.0, 5.0}});
+  ASSERT_TRUE(f.ok);
+  EXPECT_FALSE(f.observable[1]);
+  EXPECT_NEAR(f.values[1], 1.0, 1e-6);  // its anchor (the initial value), not 1.3
+  // Anchored, the weak row adds 100 x 0.3^2 = 9 to a fit of about kRows.
+  EXPECT_GT(f.rss, static_cast<double>(kRows) / 2.0 + 8.0);
+  EXPECT_LT(f.rss, 2.0 * static_cast<double>(kRows));
+}
+
 TEST(FitTest, ChiSquareAsANormalDeviate) {
   // One degree of freedom: the deviate itself.
   for (double z : {0.5, 1.0, 3.0, 5.0, 12.0, 40.0})
