@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <random>
 #include <span>
 #include <vector>
@@ -45,6 +46,15 @@ FitProblem decay_problem(const Decay& d) {
     }
     return true;
   };
+  return p;
+}
+
+// A problem of `rows` rows, each its own window (residuals to be set).
+FitProblem one_window_per_row(std::size_t rows) {
+  FitProblem p;
+  p.row_count = rows;
+  p.window_count = rows;
+  for (std::size_t k = 0; k < rows; ++k) p.row_window.push_back(k);
   return p;
 }
 
@@ -131,10 +141,7 @@ TEST(FitTest, ACombinationNotFixedIsHeldAtItsAnchorsWhereTheModelIsNotLinear) {
     gain.push_back(1.0 + 0.5 * std::sin(0.1 * static_cast<double>(k)));
     noise.push_back(kSigma * gauss(rng));
   }
-  FitProblem p;
-  p.row_count = kRows + 1;
-  p.window_count = kRows + 1;
-  for (std::size_t k = 0; k <= kRows; ++k) p.row_window.push_back(k);
+  FitProblem p = one_window_per_row(kRows + 1);
   p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
     r.resize(kRows + 1);
     for (std::size_t k = 0; k < kRows; ++k)
@@ -164,24 +171,36 @@ TEST(FitTest, ACombinationNotFixedIsHeldAtItsAnchorsWhereTheModelIsNotLinear) {
   EXPECT_LT(std::abs(f.values[1] - 1.0), 0.05);
 }
 
+// y = 2 x + offset + noise at the abscissae x_of(k).
+struct Line {
+  std::vector<double> x;
+  std::vector<double> y;
+};
+
+Line noisy_line(std::size_t rows, const std::function<double(std::size_t)>& x_of, double offset,
+                double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Line l;
+  for (std::size_t k = 0; k < rows; ++k) {
+    l.x.push_back(x_of(k));
+    l.y.push_back(2.0 * l.x.back() + offset + sigma * gauss(rng));
+  }
+  return l;
+}
+
 // A parameter whose effect saturates (as a limit the run reaches at a few steps does): at the
 // optimum the rows hardly depend on it, so the slope calls it unfixed, yet at its anchor the
 // rows are far off. It is not a flat valley, and the optimum stands.
 TEST(FitTest, AParameterTheSlopeCallsUnfixedStaysWhereTheAnchorWouldBreakTheFit) {
   constexpr double kSigma = 0.01;
   constexpr std::size_t kRows = 200;
-  std::mt19937 rng(5);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<double> x;
-  std::vector<double> y;
-  for (std::size_t k = 0; k < kRows; ++k) {
-    x.push_back(0.01 * static_cast<double>(k));
-    y.push_back(2.0 * x.back() + std::tanh(12.0) + kSigma * gauss(rng));
-  }
-  FitProblem p;
-  p.row_count = kRows;
-  p.window_count = kRows;
-  for (std::size_t k = 0; k < kRows; ++k) p.row_window.push_back(k);
+  const Line line = noisy_line(
+      kRows, [](std::size_t k) { return 0.01 * static_cast<double>(k); }, std::tanh(12.0), kSigma,
+      5);
+  const std::vector<double>& x = line.x;
+  const std::vector<double>& y = line.y;
+  FitProblem p = one_window_per_row(kRows);
   p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
     r.resize(kRows);
     for (std::size_t k = 0; k < kRows; ++k)
@@ -207,18 +226,12 @@ TEST(FitTest, AParameterTheSlopeCallsUnfixedStaysWhereTheAnchorWouldBreakTheFit)
 TEST(FitTest, AWeaklyFixedCombinationThatDriftedGoesBackToItsAnchor) {
   constexpr double kSigma = 1e-3;
   constexpr std::size_t kRows = 200;
-  std::mt19937 rng(9);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<double> x;
-  std::vector<double> y;
-  for (std::size_t k = 0; k < kRows; ++k) {
-    x.push_back(1.0 + 0.5 * std::sin(0.1 * static_cast<double>(k)));
-    y.push_back(2.0 * x.back() + kSigma * gauss(rng));
-  }
-  FitProblem p;
-  p.row_count = kRows + 1;
-  p.window_count = kRows + 1;
-  for (std::size_t k = 0; k <= kRows; ++k) p.row_window.push_back(k);
+  const Line line = noisy_line(
+      kRows, [](std::size_t k) { return 1.0 + 0.5 * std::sin(0.1 * static_cast<double>(k)); }, 0.0,
+      kSigma, 9);
+  const std::vector<double>& x = line.x;
+  const std::vector<double>& y = line.y;
+  FitProblem p = one_window_per_row(kRows + 1);
   p.residuals = [&](std::span<const double> th, std::vector<double>& r) {
     r.resize(kRows + 1);
     for (std::size_t k = 0; k < kRows; ++k) r[k] = (y[k] - th[0] * x[k]) / kSigma;
