@@ -30,12 +30,6 @@ std::string CandidateScore::label() const {
 namespace detail {
 namespace {
 
-std::vector<double> initial_nuisance(const QuestionReplay& replay) {
-  std::vector<double> initial;
-  for (const ParamSpec& p : replay.nuisance) initial.push_back(p.initial);
-  return initial;
-}
-
 QuestionReplay with_known_variance(const RobotModel& base, const QuestionReplay& given) {
   QuestionReplay replay = given;
   if (replay.known_variance_of)

@@ -236,6 +236,12 @@ MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<doubl
   return m;
 }
 
+std::vector<double> initial_nuisance(const QuestionReplay& replay) {
+  std::vector<double> initial;
+  for (const ParamSpec& p : replay.nuisance) initial.push_back(p.initial);
+  return initial;
+}
+
 namespace {
 
 // Whether a nuisance parameter sits on (within a thousandth of its range of) a bound.
@@ -270,9 +276,7 @@ Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
       // beside it would make up for the rest. The effect fitted at the nuisance's initial
       // value instead, when that fits better.
       Evaluator at_initial = s.eval;
-      std::vector<double> start;
-      for (const ParamSpec& p : s.replay.nuisance) start.push_back(p.initial);
-      at_initial.set_nuisance(std::move(start));
+      at_initial.set_nuisance(initial_nuisance(s.replay));
       const FitOutcome other = fit(at_initial.problem(f.effects, false),
                                    specs_of(f.effects, initial, {}, {}), options.fit);
       if (other.ok && (!f.fit.ok || other.rss < f.fit.rss)) f.fit = other;

@@ -132,6 +132,8 @@ std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& rep
 MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<double>& residuals,
                            const std::vector<double>& sigma,
                            const std::vector<double>& residuals_before);
+/// The nuisance parameters' initial values (a command delay of zero, no motion-capture offset).
+std::vector<double> initial_nuisance(const QuestionReplay& replay);
 /// `effects` fitted from `initial` (the nuisance beside them when the replay asks for it).
 Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
                const std::vector<double>& initial, const QuestionOptions& options);
