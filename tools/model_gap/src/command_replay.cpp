@@ -309,16 +309,36 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
 
 std::vector<double> CommandReplay::timing_variance(const RobotModel& model,
                                                    double command_delay_s) const {
-  std::vector<double> early;
-  std::vector<double> late;
-  std::vector<double> out(channels_.size() * windows_->size(), 0.0);
-  if (!residuals(model, command_delay_s - 0.5 * row_period_s_, early) ||
-      !residuals(model, command_delay_s + 0.5 * row_period_s_, late)) {
+  const std::vector<Window>& windows = *windows_;
+  const std::size_t w = windows.size();
+  std::vector<double> out(channels_.size() * w, 0.0);
+  Track early;
+  Track late;
+  if (!simulate(model, command_delay_s - 0.5 * row_period_s_, run_->size(), false, early) ||
+      !simulate(model, command_delay_s + 0.5 * row_period_s_, run_->size(), false, late)) {
     return out;
   }
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    const double d = late[k] - early[k];
-    out[k] = std::isfinite(d) ? d * d / 12.0 : 0.0;
+  // d: how much one row's change of the channel moves when the commands come a row later.
+  const auto row_shift = [&](std::size_t c, std::size_t k) {
+    if (c < modules_) {
+      return (late.wheel[c][k] - late.wheel[c][k - 1]) -
+             (early.wheel[c][k] - early.wheel[c][k - 1]);
+    }
+    return wrap_pi(late.steer[c - modules_][k] - early.steer[c - modules_][k]);
+  };
+  for (std::size_t j = 0; j < w; ++j) {
+    if (compared_[j] == 0) continue;
+    for (std::size_t c = 0; c < channels_.size(); ++c) {
+      double common = 0.0;
+      double own = 0.0;
+      for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) {
+        const double d = row_shift(c, k);
+        if (!std::isfinite(d)) continue;
+        common += d;
+        own += d * d;
+      }
+      out[c * w + j] = (common * common + own) / 12.0;
+    }
   }
   return out;
 }

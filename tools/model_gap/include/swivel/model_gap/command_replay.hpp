@@ -66,8 +66,11 @@ class CommandReplay {
                  std::size_t window_limit = static_cast<std::size_t>(-1)) const;
 
   /// Variance each window's residual gets (channel-major) from not knowing when within its
-  /// row each change of the commands came: the change of the residuals when every command
-  /// is taken half a row earlier or later, (r+ - r-)^2 / 12 (a uniform instant).
+  /// row each change of the commands came, a uniform instant. With d_k the change of row k's
+  /// turn when every command is taken a row later: (sum d_k)^2 / 12 for a shift common to
+  /// the window's changes, plus sum d_k^2 / 12 for each row's own. The common part alone
+  /// vanishes in a window that ends turning as fast as it began (a turn slowing, then a
+  /// translation starting), though each change in it came at an instant of its own.
   [[nodiscard]] std::vector<double> timing_variance(const RobotModel& model,
                                                     double command_delay_s) const;
 
