@@ -20,6 +20,27 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Rows on each side whose motion capture is averaged into a window's end pose.
 constexpr std::size_t kAnchorHalfWidth = 5;
+// Share of the stated steering rate limit from which a caster counts as held at it: a
+// row's mean rate falls short of the limit by the servo's ramp into and out of it.
+constexpr double kAtLimitShare = 0.9;
+
+// Per window: some caster's steering rate over one of its rows reached kAtLimitShare of
+// the model's stated limit (none when the model states none).
+std::vector<char> windows_at_steering_limit(const RobotModel& nominal, const RunData& run,
+                                            const std::vector<Window>& windows) {
+  std::vector<char> out(windows.size(), 0);
+  if (run.drivetrain != DrivetrainKind::kSwpc || !nominal.limits.steering_rate_radps) return out;
+  const double at_limit = kAtLimitShare * *nominal.limits.steering_rate_radps;
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    for (std::size_t k = windows[j].a + 1; k <= windows[j].b && out[j] == 0; ++k) {
+      const double dt = run.t_s[k] - run.t_s[k - 1];
+      for (const std::vector<double>& steer : run.steer_rad) {
+        if (std::abs(wrap_pi(steer[k] - steer[k - 1])) >= at_limit * dt) out[j] = 1;
+      }
+    }
+  }
+  return out;
+}
 
 // 1/2 w |w|: its change over a step is the integral of |w| dw/dt, the slip of sim/effects.hpp.
 double half_signed_square(double w) { return 0.5 * w * std::abs(w); }
@@ -135,6 +156,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
+  at_steering_limit_ = windows_at_steering_limit(nominal, run, windows_);
 }
 
 TruthNuisance SensorReplay::truth(std::span<const double> values) const {
@@ -260,7 +282,7 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   for (std::size_t j = 0; j < used; ++j) {
     const Pose2& ma = anchor_a_[j];
     const Pose2& mb = anchor_b_[j];
-    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m)) continue;
+    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || at_steering_limit_[j] != 0) continue;
     const double ta = t[windows_[j].a] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].a]);
     const double tb = t[windows_[j].b] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].b]);
     const Pose2 measured = compose(compose(body, between(ma, mb)), body_inverse);

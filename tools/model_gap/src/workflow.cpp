@@ -321,6 +321,14 @@ void record_run(const RunData& run, const SensorReplay& sensors, GapResult& resu
         ", and sensor_latency, which this question cannot tell from it, is not a candidate.");
   }
   const std::size_t w = sensors.windows().size();
+  const auto held = static_cast<std::size_t>(std::ranges::count(sensors.at_steering_limit(), 1));
+  if (held > 0) {
+    result.notes.emplace_back(
+        std::to_string(held) + " of " + std::to_string(w) +
+        " windows are not compared in the sensor question: a caster steered at the model's "
+        "rate limit in them, held back from the angle its motion needs, and its tyre scrubbed "
+        "sideways, which the kinematics cannot hold.");
+  }
   if (w < 10) {
     throw std::invalid_argument(
         "run " + run.source + " gives " + std::to_string(w) + " windows of " +

@@ -32,6 +32,10 @@
 //                          log declares the clocks run at one rate (`# truth_clock: same_rate`)
 // A run whose truth is the robot's own reference frame (`# truth_frame: robot`, a simulator's)
 // fits neither the yaw offset nor the lever arm.
+//
+// Windows in which a caster steered at the model's stated rate limit are not compared: there
+// the controller holds the casters back from the angle their motion needs, and the tyres
+// scrub sideways, which the no-lateral-slip kinematics cannot hold.
 
 #include <span>
 #include <vector>
@@ -93,6 +97,9 @@ class SensorReplay {
   /// Motion capture at each window's ends (noise averaged, see anchor()).
   [[nodiscard]] const std::vector<Pose2>& anchors_start() const { return anchor_a_; }
   [[nodiscard]] const std::vector<Pose2>& anchors_end() const { return anchor_b_; }
+  /// Per window: a caster steered at the rate limit the model states (see the .cpp); such
+  /// windows are not compared.
+  [[nodiscard]] const std::vector<char>& at_steering_limit() const { return at_steering_limit_; }
   /// Start pose: motion capture averaged while the robot stands at the start (up to 1 s).
   [[nodiscard]] const Pose2& start_pose() const { return start_; }
 
@@ -137,6 +144,7 @@ class SensorReplay {
   WindowMotion motion_;
   std::vector<Pose2> anchor_a_;
   std::vector<Pose2> anchor_b_;
+  std::vector<char> at_steering_limit_;
   // Scratch of the last integration.
   mutable std::vector<Pose2> track_;
   mutable std::vector<double> encoder_yaw_;
