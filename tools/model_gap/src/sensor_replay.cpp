@@ -23,15 +23,70 @@ constexpr std::size_t kAnchorHalfWidth = 5;
 // Share of the stated steering rate limit from which a caster counts as held at it: a
 // row's mean rate falls short of the limit by the servo's ramp into and out of it.
 constexpr double kAtLimitShare = 0.9;
+// How far the casters must disagree about the body's motion in a window held at the limit,
+// over the run's median window, for it to count as scrubbing. Elsewhere the windows of the
+// second generator's clean caster runs stay within 1.4 times the median; those where the
+// sensor question saw jumps of 9-28 sigma lie at 1.9-42 times it.
+constexpr double kScrubMisfitFactor = 1.5;
+
+// A caster module's steering angle (mid-row, offset applied), steering rate and wheel rate
+// over row k, from the encoders.
+void module_rates(const RunData& run, const SwpcModuleParams& m, std::size_t i, std::size_t k,
+                  double wheel_turn, double& phi, double& steer_rate, double& wheel_rate) {
+  const double dt = run.t_s[k] - run.t_s[k - 1];
+  const double dphi = run.steer_rad[i][k] - run.steer_rad[i][k - 1];
+  phi = run.steer_rad[i][k - 1] + 0.5 * dphi + m.steering_offset_rad;
+  steer_rate = dphi / dt;
+  wheel_rate = wheel_turn / dt;
+}
+
+// Per window: how far the casters disagree about the body's motion, the forward
+// kinematics' RMS equation residual (m/s) integrated over its rows (m).
+std::vector<double> caster_disagreement(const sim::PlantParams& plant, const RunData& run,
+                                        const std::vector<Window>& windows) {
+  const std::size_t modules = run.steer_rad.size();
+  std::vector<double> per_row(run.size(), 0.0);
+  std::array<double, kMaxModules> phi{};
+  std::array<double, kMaxModules> steer_rate{};
+  std::array<double, kMaxModules> wheel_rate{};
+  for (std::size_t k = 1; k < run.size(); ++k) {
+    for (std::size_t i = 0; i < modules; ++i) {
+      module_rates(run, plant.modules[i], i, k, run.wheel_rad[i][k] - run.wheel_rad[i][k - 1],
+                   phi[i], steer_rate[i], wheel_rate[i]);
+    }
+    const swpc::ForwardResult fit =
+        swpc::forward(std::span<const SwpcModuleParams>(plant.modules.data(), modules),
+                      std::span<const double>(phi.data(), modules),
+                      std::span<const double>(steer_rate.data(), modules),
+                      std::span<const double>(wheel_rate.data(), modules));
+    if (fit.ok) per_row[k] = fit.residual * (run.t_s[k] - run.t_s[k - 1]);
+  }
+  std::vector<double> out(windows.size(), 0.0);
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) out[j] += per_row[k];
+  }
+  return out;
+}
 
 // Per window: some caster's steering rate over one of its rows reached kAtLimitShare of
-// the model's stated limit (none when the model states none).
-std::vector<char> windows_at_steering_limit(const RobotModel& nominal, const RunData& run,
-                                            const std::vector<Window>& windows) {
+// the model's stated limit (none when the model states none), and the casters disagreed
+// about the motion kScrubMisfitFactor times as much as in the run's median window.
+std::vector<char> windows_held_and_scrubbing(const RobotModel& nominal, const RunData& run,
+                                             const std::vector<Window>& windows) {
   std::vector<char> out(windows.size(), 0);
-  if (run.drivetrain != DrivetrainKind::kSwpc || !nominal.limits.steering_rate_radps) return out;
+  if (run.drivetrain != DrivetrainKind::kSwpc || !nominal.limits.steering_rate_radps ||
+      windows.empty()) {
+    return out;
+  }
+  const std::vector<double> disagreement =
+      caster_disagreement(sim::resolve_plant(nominal), run, windows);
+  std::vector<double> sorted = disagreement;
+  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double scrubbing = kScrubMisfitFactor * *mid;
   const double at_limit = kAtLimitShare * *nominal.limits.steering_rate_radps;
   for (std::size_t j = 0; j < windows.size(); ++j) {
+    if (!(disagreement[j] >= scrubbing)) continue;
     for (std::size_t k = windows[j].a + 1; k <= windows[j].b && out[j] == 0; ++k) {
       const double dt = run.t_s[k] - run.t_s[k - 1];
       for (const std::vector<double>& steer : run.steer_rad) {
@@ -156,7 +211,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
-  at_steering_limit_ = windows_at_steering_limit(nominal, run, windows_);
+  at_steering_limit_ = windows_held_and_scrubbing(nominal, run, windows_);
 }
 
 TruthNuisance SensorReplay::truth(std::span<const double> values) const {
@@ -206,10 +261,7 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,
                                               dpsi[0], dpsi[1]);
     } else {
       for (std::size_t i = 0; i < modules_; ++i) {
-        const double dphi = run.steer_rad[i][k] - run.steer_rad[i][k - 1];
-        phi[i] = run.steer_rad[i][k - 1] + 0.5 * dphi + plant.modules[i].steering_offset_rad;
-        steer_rate[i] = dphi / dt;
-        wheel_rate[i] = dpsi[i] / dt;
+        module_rates(run, plant.modules[i], i, k, dpsi[i], phi[i], steer_rate[i], wheel_rate[i]);
       }
       const swpc::ForwardResult fit =
           swpc::forward(std::span<const SwpcModuleParams>(plant.modules.data(), modules_),

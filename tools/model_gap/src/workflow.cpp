@@ -326,8 +326,9 @@ void record_run(const RunData& run, const SensorReplay& sensors, GapResult& resu
     result.notes.emplace_back(
         std::to_string(held) + " of " + std::to_string(w) +
         " windows are not compared in the sensor question: a caster steered at the model's "
-        "rate limit in them, held back from the angle its motion needs, and its tyre scrubbed "
-        "sideways, which the kinematics cannot hold.");
+        "rate limit in them, held back from the angle its motion needs, and the casters "
+        "disagreed about the motion (a tyre scrubbed sideways), which the kinematics cannot "
+        "hold.");
   }
   if (w < 10) {
     throw std::invalid_argument(
