@@ -12,33 +12,22 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <sstream>
 #include <vector>
 
+#include "second_runs.hpp"
 #include "swivel/model_gap/command_replay.hpp"
-#include "swivel/model_gap/run_log_adapter.hpp"
 #include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/model_gap/workflow.hpp"
-#include "swivel/robot_model_io.hpp"
-#include "swivel/run_log.hpp"
 #include "swivel/second/validation_set.hpp"
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
 namespace {
 
-struct CleanRun {
-  RobotModel model;
-  RunData run;
-};
-
 // A smoke-range clean hex6 run (six casters on a 0.4 m ring, 80-90 Hz rows).
-CleanRun clean_hex6(std::size_t index) {
+SecondRun clean_hex6(std::size_t index) {
   const second::ValidationCase c = second::clean_case(second::kSmokeSeeds.clean, index);
-  const second::GeneratedRun generated = second::generate(c.spec);
-  std::istringstream in(generated.run_csv);
-  return {parse_robot_model(generated.nominal_model_yaml, "hex6.yaml"),
-          to_run_data(parse_run_log(in, c.id))};
+  return load_second_run(c.spec, c.id);
 }
 
 double wheel_rss(const CommandReplay& commands, const RobotModel& model, double delay_s) {
@@ -56,7 +45,7 @@ double wheel_rss(const CommandReplay& commands, const RobotModel& model, double 
 }
 
 TEST(CommandTiming, TheReplayMovesWithTheCommandDelayAndIsBestWhereTheRobotWas) {
-  const CleanRun clean = clean_hex6(80);
+  const SecondRun clean = clean_hex6(80);
   ASSERT_EQ(clean.model.drivetrain, DrivetrainKind::kSwpc);
   const SensorReplay sensors(clean.model, clean.run, 1.0);
   std::vector<Pose2> path;
@@ -73,7 +62,7 @@ TEST(CommandTiming, TheReplayMovesWithTheCommandDelayAndIsBestWhereTheRobotWas) 
 
 // The command question on a clean smoke-range hex6 run: no significant gap.
 GapResult expect_no_command_gap(std::size_t index) {
-  const CleanRun clean = clean_hex6(index);
+  const SecondRun clean = clean_hex6(index);
   GapResult r = analyse_gap(clean.model, clean.run);
   EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
       << "index " << index << ": " << r.command.summary;
@@ -101,11 +90,9 @@ TEST(CasterSwing, TheWindowAfterASwingStartsWhereTheLogsCastersAre) {
 TEST(CommandTiming, EachCommandChangesOwnInstantCountsWhereAWindowEndsAsItBegan) {
   for (const std::size_t index : {206U, 230U}) {
     const second::ValidationCase c = second::clean_case(second::kFirstValidationSeeds.clean, index);
-    const second::GeneratedRun generated = second::generate(c.spec);
-    std::istringstream in(generated.run_csv);
-    const RobotModel model = parse_robot_model(generated.nominal_model_yaml, "hex6.yaml");
-    ASSERT_EQ(model.modules.size(), 6U);
-    const GapResult r = analyse_gap(model, to_run_data(parse_run_log(in, c.id)));
+    const SecondRun hex6 = load_second_run(c.spec, c.id);
+    ASSERT_EQ(hex6.model.modules.size(), 6U);
+    const GapResult r = analyse_gap(hex6.model, hex6.run);
     EXPECT_EQ(r.command.verdict, Verdict::kNoSignificantGap)
         << "index " << index << ": " << r.command.summary;
   }
@@ -120,14 +107,11 @@ TEST(CommandTiming, ALimitTheModelLacksIsNotFittedBesideTheDelayThatStoodInForIt
   const second::ValidationCase c = second::library_case(second::kFirstValidationSeeds.library, 23);
   ASSERT_EQ(c.expected.size(), 1U);
   ASSERT_EQ(c.expected[0].effect, "accel_limit");
-  const second::GeneratedRun generated = second::generate(c.spec);
-  std::istringstream in(generated.run_csv);
-  const RobotModel model = parse_robot_model(generated.nominal_model_yaml, "wide_diff.yaml");
-  const RunData run = to_run_data(parse_run_log(in, c.id));
-  ASSERT_EQ(model.drivetrain, DrivetrainKind::kDifferential);
-  ASSERT_FALSE(model.limits.linear_acceleration_mps2.has_value());
+  const SecondRun wide_diff = load_second_run(c.spec, c.id);
+  ASSERT_EQ(wide_diff.model.drivetrain, DrivetrainKind::kDifferential);
+  ASSERT_FALSE(wide_diff.model.limits.linear_acceleration_mps2.has_value());
 
-  const GapResult r = analyse_gap(model, run);
+  const GapResult r = analyse_gap(wide_diff.model, wide_diff.run);
   ASSERT_EQ(r.command.verdict, Verdict::kNamed) << r.command.summary;
   ASSERT_EQ(r.command.named.size(), 1U) << r.command.summary;
   const FittedEffect& e = r.command.named[0];
@@ -150,12 +134,10 @@ TEST(CommandTiming, AStatedLimitTheRunNeverReachesIsFittedWhereTheRobotsActs) {
   ASSERT_EQ(c.expected.size(), 1U);
   ASSERT_EQ(c.expected[0].effect, "steering_rate_limit");
   const double truth = c.expected[0].params[0].second;
-  const second::GeneratedRun generated = second::generate(c.spec);
-  std::istringstream in(generated.run_csv);
-  const RobotModel model = parse_robot_model(generated.nominal_model_yaml, "trike3.yaml");
-  ASSERT_GT(model.limits.steering_rate_radps.value_or(0.0), 3.0 * truth);
+  const SecondRun trike3 = load_second_run(c.spec, c.id);
+  ASSERT_GT(trike3.model.limits.steering_rate_radps.value_or(0.0), 3.0 * truth);
 
-  const GapResult r = analyse_gap(model, to_run_data(parse_run_log(in, c.id)));
+  const GapResult r = analyse_gap(trike3.model, trike3.run);
   const auto limit = std::ranges::find_if(r.command.candidates, [](const CandidateScore& s) {
     return s.effects == std::vector<std::string>{"steering_rate_limit"};
   });

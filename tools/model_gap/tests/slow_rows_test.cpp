@@ -7,13 +7,10 @@
 
 #include <cmath>
 #include <cstdint>
-#include <sstream>
 #include <string>
 
-#include "swivel/model_gap/run_log_adapter.hpp"
+#include "second_runs.hpp"
 #include "swivel/model_gap/workflow.hpp"
-#include "swivel/robot_model_io.hpp"
-#include "swivel/run_log.hpp"
 #include "swivel/second/second_robot.hpp"
 
 namespace swivel::model_gap {
@@ -27,10 +24,8 @@ GapResult analyse_latency_run(std::uint64_t seed) {
   spec.duration_s = 90.0;
   spec.seed = seed;
   second::set_truth(spec, "sensor_latency.delay_s=0.1");
-  const second::GeneratedRun generated = second::generate(spec);
-  std::istringstream in(generated.run_csv);
-  const RunData run = to_run_data(parse_run_log(in, "latency_20hz.csv"));
-  return analyse_gap(parse_robot_model(generated.nominal_model_yaml, "mid_diff.yaml"), run);
+  const SecondRun latency = load_second_run(spec, "latency_20hz");
+  return analyse_gap(latency.model, latency.run);
 }
 
 TEST(SlowRows, A20HzRunNamesA100MillisecondLatencyWithinFivePercent) {

@@ -8,32 +8,21 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <sstream>
 #include <vector>
 
-#include "swivel/model_gap/run_log_adapter.hpp"
+#include "second_runs.hpp"
 #include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/model_gap/workflow.hpp"
-#include "swivel/robot_model_io.hpp"
-#include "swivel/run_log.hpp"
 #include "swivel/second/validation_set.hpp"
 #include "swivel/sim/effects.hpp"
 
 namespace swivel::model_gap {
 namespace {
 
-struct FirstSetRun {
-  RobotModel model;
-  RunData run;
-};
-
 // A clean run of the first validation set (development data now).
-FirstSetRun first_set_clean_run(std::size_t index) {
+SecondRun first_set_clean_run(std::size_t index) {
   const second::ValidationCase c = second::clean_case(second::kFirstValidationSeeds.clean, index);
-  const second::GeneratedRun generated = second::generate(c.spec);
-  std::istringstream in(generated.run_csv);
-  return {parse_robot_model(generated.nominal_model_yaml, "model.yaml"),
-          to_run_data(parse_run_log(in, c.id))};
+  return load_second_run(c.spec, c.id);
 }
 
 std::size_t count_held_windows(const SensorReplay& sensors) {
@@ -44,7 +33,7 @@ std::size_t count_held_windows(const SensorReplay& sensors) {
 // jumps of 22-28 sigma in the two windows whose casters swung at the limit, where the casters
 // disagreed about the motion 3.3 and 5.3 times as much as in the run's median window.
 TEST(SteeringLimit, WindowsWhereCastersSteerAtTheStatedLimitAreNotCompared) {
-  const FirstSetRun clean = first_set_clean_run(163);
+  const SecondRun clean = first_set_clean_run(163);
   ASSERT_EQ(clean.model.modules.size(), 4U);
   ASSERT_TRUE(clean.model.limits.steering_rate_radps.has_value());
   const SensorReplay sensors(clean.model, clean.run, 1.0);
@@ -70,7 +59,7 @@ TEST(SteeringLimit, WindowsWhereCastersSteerAtTheStatedLimitAreNotCompared) {
 // A model that states no limit leaves every window compared: nothing tells where the casters
 // were held.
 TEST(SteeringLimit, AModelWithoutALimitComparesEveryWindow) {
-  FirstSetRun clean = first_set_clean_run(163);
+  SecondRun clean = first_set_clean_run(163);
   clean.model.limits.steering_rate_radps.reset();
   const SensorReplay sensors(clean.model, clean.run, 1.0);
   EXPECT_EQ(count_held_windows(sensors), 0U);

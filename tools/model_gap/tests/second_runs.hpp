@@ -1,0 +1,23 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// A run of the second robot generator (tests/second_robot), read back through the project's
+// own readers as a user's files would be: the tests of the model-gap workflow on runs it did
+// not make.
+
+#include <string>
+
+#include "swivel/model_gap/run_data.hpp"
+#include "swivel/robot_model.hpp"
+#include "swivel/second/second_robot.hpp"
+
+namespace swivel::model_gap {
+
+struct SecondRun {
+  RobotModel model;  ///< the nominal model the generator writes
+  RunData run;
+};
+
+/// Generates `spec` and parses its CSV and YAML; `name` labels both in error messages.
+SecondRun load_second_run(const second::RunSpec& spec, const std::string& name);
+
+}  // namespace swivel::model_gap
