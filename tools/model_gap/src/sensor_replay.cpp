@@ -40,12 +40,19 @@ void module_rates(const RunData& run, const SwpcModuleParams& m, std::size_t i, 
   wheel_rate = wheel_turn / dt;
 }
 
-// Per window: how far the casters disagree about the body's motion, the forward
-// kinematics' RMS equation residual (m/s) integrated over its rows (m).
-std::vector<double> caster_disagreement(const sim::PlantParams& plant, const RunData& run,
-                                        const std::vector<Window>& windows) {
+// Per window, from the encoders: how far the casters disagree about the body's motion (the
+// forward kinematics' RMS equation residual, m/s, integrated over its rows: m) and the
+// fastest any caster steered over one of its rows (rad/s).
+struct WindowSteering {
+  std::vector<double> disagreement_m;
+  std::vector<double> peak_steer_rate_radps;
+};
+
+WindowSteering window_steering(const sim::PlantParams& plant, const RunData& run,
+                               const std::vector<Window>& windows) {
   const std::size_t modules = run.steer_rad.size();
-  std::vector<double> per_row(run.size(), 0.0);
+  std::vector<double> disagreement(run.size(), 0.0);
+  std::vector<double> peak_rate(run.size(), 0.0);
   std::array<double, kMaxModules> phi{};
   std::array<double, kMaxModules> steer_rate{};
   std::array<double, kMaxModules> wheel_rate{};
@@ -53,17 +60,22 @@ std::vector<double> caster_disagreement(const sim::PlantParams& plant, const Run
     for (std::size_t i = 0; i < modules; ++i) {
       module_rates(run, plant.modules[i], i, k, run.wheel_rad[i][k] - run.wheel_rad[i][k - 1],
                    phi[i], steer_rate[i], wheel_rate[i]);
+      peak_rate[k] = std::max(peak_rate[k], std::abs(steer_rate[i]));
     }
     const swpc::ForwardResult fit =
         swpc::forward(std::span<const SwpcModuleParams>(plant.modules.data(), modules),
                       std::span<const double>(phi.data(), modules),
                       std::span<const double>(steer_rate.data(), modules),
                       std::span<const double>(wheel_rate.data(), modules));
-    if (fit.ok) per_row[k] = fit.residual * (run.t_s[k] - run.t_s[k - 1]);
+    if (fit.ok) disagreement[k] = fit.residual * (run.t_s[k] - run.t_s[k - 1]);
   }
-  std::vector<double> out(windows.size(), 0.0);
+  WindowSteering out{std::vector<double>(windows.size(), 0.0),
+                     std::vector<double>(windows.size(), 0.0)};
   for (std::size_t j = 0; j < windows.size(); ++j) {
-    for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) out[j] += per_row[k];
+    for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) {
+      out.disagreement_m[j] += disagreement[k];
+      out.peak_steer_rate_radps[j] = std::max(out.peak_steer_rate_radps[j], peak_rate[k]);
+    }
   }
   return out;
 }
@@ -78,21 +90,17 @@ std::vector<char> windows_held_and_scrubbing(const RobotModel& nominal, const Ru
       windows.empty()) {
     return out;
   }
-  const std::vector<double> disagreement =
-      caster_disagreement(sim::resolve_plant(nominal), run, windows);
-  std::vector<double> sorted = disagreement;
+  const WindowSteering steering = window_steering(sim::resolve_plant(nominal), run, windows);
+  std::vector<double> sorted = steering.disagreement_m;
   const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
   std::nth_element(sorted.begin(), mid, sorted.end());
   const double scrubbing = kScrubMisfitFactor * *mid;
   const double at_limit = kAtLimitShare * *nominal.limits.steering_rate_radps;
   for (std::size_t j = 0; j < windows.size(); ++j) {
-    if (!(disagreement[j] >= scrubbing)) continue;
-    for (std::size_t k = windows[j].a + 1; k <= windows[j].b && out[j] == 0; ++k) {
-      const double dt = run.t_s[k] - run.t_s[k - 1];
-      for (const std::vector<double>& steer : run.steer_rad) {
-        if (std::abs(wrap_pi(steer[k] - steer[k - 1])) >= at_limit * dt) out[j] = 1;
-      }
-    }
+    out[j] =
+        steering.disagreement_m[j] >= scrubbing && steering.peak_steer_rate_radps[j] >= at_limit
+            ? 1
+            : 0;
   }
   return out;
 }
@@ -211,7 +219,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
-  at_steering_limit_ = windows_held_and_scrubbing(nominal, run, windows_);
+  held_and_scrubbing_ = windows_held_and_scrubbing(nominal, run, windows_);
 }
 
 TruthNuisance SensorReplay::truth(std::span<const double> values) const {
@@ -334,7 +342,7 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   for (std::size_t j = 0; j < used; ++j) {
     const Pose2& ma = anchor_a_[j];
     const Pose2& mb = anchor_b_[j];
-    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || at_steering_limit_[j] != 0) continue;
+    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || held_and_scrubbing_[j] != 0) continue;
     const double ta = t[windows_[j].a] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].a]);
     const double tb = t[windows_[j].b] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].b]);
     const Pose2 measured = compose(compose(body, between(ma, mb)), body_inverse);

@@ -26,7 +26,7 @@ SecondRun first_set_clean_run(std::size_t index) {
 }
 
 std::size_t count_held_windows(const SensorReplay& sensors) {
-  return static_cast<std::size_t>(std::ranges::count(sensors.at_steering_limit(), 1));
+  return static_cast<std::size_t>(std::ranges::count(sensors.held_and_scrubbing(), 1));
 }
 
 // cart4 (limit 5 rad/s) at 44 Hz on-the-spot turns: its sensor question was "unexplained" by
@@ -45,7 +45,7 @@ TEST(SteeringLimit, WindowsWhereCastersSteerAtTheStatedLimitAreNotCompared) {
   std::vector<double> r;
   ASSERT_TRUE(sensors.residuals(sim::resolve_plant(clean.model), TruthNuisance{}, r));
   for (std::size_t j = 0; j < w; ++j) {
-    if (sensors.at_steering_limit()[j] != 0) {
+    if (sensors.held_and_scrubbing()[j] != 0) {
       EXPECT_TRUE(std::isnan(r[j])) << "window " << j;
     }
   }

@@ -101,7 +101,7 @@ class SensorReplay {
   [[nodiscard]] const std::vector<Pose2>& anchors_end() const { return anchor_b_; }
   /// Per window: a caster steered at the rate limit the model states and the casters
   /// scrubbed (see above); such windows are not compared.
-  [[nodiscard]] const std::vector<char>& at_steering_limit() const { return at_steering_limit_; }
+  [[nodiscard]] const std::vector<char>& held_and_scrubbing() const { return held_and_scrubbing_; }
   /// Start pose: motion capture averaged while the robot stands at the start (up to 1 s).
   [[nodiscard]] const Pose2& start_pose() const { return start_; }
 
@@ -146,7 +146,7 @@ class SensorReplay {
   WindowMotion motion_;
   std::vector<Pose2> anchor_a_;
   std::vector<Pose2> anchor_b_;
-  std::vector<char> at_steering_limit_;
+  std::vector<char> held_and_scrubbing_;
   // Scratch of the last integration.
   mutable std::vector<Pose2> track_;
   mutable std::vector<double> encoder_yaw_;
