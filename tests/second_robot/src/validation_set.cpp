@@ -139,6 +139,15 @@ std::vector<std::string> library_case_effects() {
   return out;
 }
 
+const SeedRanges* seed_ranges_named(std::string_view name) {
+  if (name == "smoke") return &kSmokeSeeds;
+  if (name == "validation") return &kValidationSeeds;
+  if (name == "first-validation") return &kFirstValidationSeeds;
+  if (name == "second-validation") return &kSecondValidationSeeds;
+  if (name == "third-validation") return &kThirdValidationSeeds;
+  return nullptr;
+}
+
 ValidationCase clean_case(std::uint64_t first_seed, std::size_t index) {
   const std::uint64_t seed = first_seed + index;
   Stream rng(seed, kCaseStream);

@@ -370,6 +370,15 @@ namespace {
 // A clean run is the nominal robot: what its physics has beyond the model (creep, caster
 // servo, scrub when the casters swing round) must stay far below the motion capture's noise.
 // Checked on the smoke range, window by window: ground lost by any wheel in one second.
+TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
+  EXPECT_EQ(seed_ranges_named("smoke"), &kSmokeSeeds);
+  EXPECT_EQ(seed_ranges_named("validation"), &kValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("first-validation"), &kFirstValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("second-validation"), &kSecondValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("third-validation"), &kThirdValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("fourth-validation"), nullptr);
+}
+
 TEST(SecondRobotValidationSet, CleanRunsSlipLessThanTheNoise) {
   for (std::size_t index : {0U, 1U, 3U, 7U}) {
     RunSpec spec = clean_case(kSmokeSeeds.clean, index).spec;

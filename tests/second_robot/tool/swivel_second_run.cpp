@@ -87,11 +87,7 @@ int run(int argc, char** argv) {
   try {
     if (!case_kind.empty()) {
       ValidationCase c;
-      const SeedRanges& ranges = seeds == "validation"          ? kValidationSeeds
-                                 : seeds == "first-validation"  ? kFirstValidationSeeds
-                                 : seeds == "second-validation" ? kSecondValidationSeeds
-                                 : seeds == "third-validation"  ? kThirdValidationSeeds
-                                                                : kSmokeSeeds;
+      const SeedRanges& ranges = *seed_ranges_named(seeds);  // checked by the option
       if (case_kind == "clean") {
         c = clean_case(ranges.clean, index);
       } else if (case_kind == "library") {

@@ -293,20 +293,13 @@ std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCas
   return jobs;
 }
 
-// An earlier validation set (development data now): reported with the targets beside it.
+// An earlier validation set (development data now; `set` is e.g. "first-validation"):
+// reported with the targets beside it.
 void report_earlier_set(const std::string& set, unsigned jobs, const std::string& quantiles_path) {
   namespace sr = swivel::second;
-  const bool first = set == "first-validation";
-  const bool second = set == "second-validation";
-  const sr::SeedRanges& seeds = first    ? sr::kFirstValidationSeeds
-                                : second ? sr::kSecondValidationSeeds
-                                         : sr::kThirdValidationSeeds;
-  const auto cases = sr::validation_set(seeds, sr::kValidationCleanRuns, sr::kValidationLibraryRuns,
-                                        sr::kValidationOutsideRuns);
-  const std::string name = std::string(first    ? "first"
-                                       : second ? "second"
-                                                : "third") +
-                           " validation set";
+  const auto cases = sr::validation_set(*sr::seed_ranges_named(set), sr::kValidationCleanRuns,
+                                        sr::kValidationLibraryRuns, sr::kValidationOutsideRuns);
+  const std::string name = set.substr(0, set.find('-')) + " validation set";
   const bool met = report(name +
                               " (second generator, seeds measured while developing: "
                               "development data, not judged)",

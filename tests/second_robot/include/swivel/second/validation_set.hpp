@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "swivel/second/second_robot.hpp"
@@ -58,6 +59,10 @@ inline constexpr std::size_t kValidationLibraryRuns = 68;  ///< 4 of each robot-
 inline constexpr std::size_t kValidationOutsideRuns = 12;
 
 inline constexpr double kValidationDurationS = 80.0;
+
+/// The seed ranges a set is named by on the command lines (`smoke`, `validation`,
+/// `first-validation`, `second-validation`, `third-validation`); nullptr for another name.
+const SeedRanges* seed_ranges_named(std::string_view name);
 
 /// One case of each kind, from its seed (and its index within the range, which spreads the
 /// cases evenly over robots and effects).
