@@ -148,6 +148,12 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   return nullptr;
 }
 
+const std::vector<std::string>& seed_set_names() {
+  static const std::vector<std::string> names = {"smoke", "validation", "first-validation",
+                                                 "second-validation", "third-validation"};
+  return names;
+}
+
 ValidationCase clean_case(std::uint64_t first_seed, std::size_t index) {
   const std::uint64_t seed = first_seed + index;
   Stream rng(seed, kCaseStream);

@@ -377,6 +377,7 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("second-validation"), &kSecondValidationSeeds);
   EXPECT_EQ(seed_ranges_named("third-validation"), &kThirdValidationSeeds);
   EXPECT_EQ(seed_ranges_named("fourth-validation"), nullptr);
+  for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
 TEST(SecondRobotValidationSet, CleanRunsSlipLessThanTheNoise) {

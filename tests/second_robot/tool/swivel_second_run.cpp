@@ -74,10 +74,9 @@ int run(int argc, char** argv) {
   app.add_option("--index", index, "with --case: its index");
   app.add_option("--seeds", seeds,
                  "with --case: its seed ranges, smoke (default), validation (do not look at "
-                 "those while developing), first-validation, second-validation or "
-                 "third-validation (the earlier validation sets, development data now)")
-      ->check(CLI::IsMember(
-          {"smoke", "validation", "first-validation", "second-validation", "third-validation"}));
+                 "those while developing), or first-validation to third-validation (the "
+                 "earlier validation sets, development data now)")
+      ->check(CLI::IsMember(swivel::second::seed_set_names()));
   app.add_option("--out", out, "run log (CSV)")->required();
   app.add_option("--model-out", model_out, "nominal model (YAML)");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;

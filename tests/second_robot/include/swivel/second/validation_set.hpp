@@ -60,9 +60,12 @@ inline constexpr std::size_t kValidationOutsideRuns = 12;
 
 inline constexpr double kValidationDurationS = 80.0;
 
-/// The seed ranges a set is named by on the command lines (`smoke`, `validation`,
-/// `first-validation`, `second-validation`, `third-validation`); nullptr for another name.
+/// The seed ranges a set is named by on the command lines (seed_set_names()); nullptr for
+/// another name.
 const SeedRanges* seed_ranges_named(std::string_view name);
+/// Those names: `smoke`, `validation`, then the earlier validation sets (development data
+/// now), `first-validation` to `third-validation`.
+const std::vector<std::string>& seed_set_names();
 
 /// One case of each kind, from its seed (and its index within the range, which spreads the
 /// cases evenly over robots and effects).
