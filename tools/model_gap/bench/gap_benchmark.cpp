@@ -8,14 +8,17 @@
 //                ranges never used while developing (validation_set.hpp: clean
 //                26341837-26342076, library 57381725-57381792, outside 59075466-59075477).
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
-//   first-, second-, third-validation  the same cases from the earlier validation sets'
-//                seeds (7340001..., 28880001..., 72548103...), which were looked at after
-//                changes and are development data now: reported with the targets beside
-//                them, never judged (only with --set first-validation etc.).
+//   first- to third-validation  the same cases from the earlier validation sets' seeds
+//                (7340001..., 28880001..., 72548103...), which were looked at after changes
+//                and are development data now: reported with the targets beside them, never
+//                judged (only with --set first-validation etc.).
 //
-//   swivel-bench-model-gap [--set development|validation|first-validation|second-validation|
+//   swivel-bench-model-gap [--set development|validation|first-validation|...|
 //                                 third-validation|both] [--quick] [--jobs N]
 //   swivel-bench-model-gap --case ID [--case ID ...]     development cases by id
+//   swivel-bench-model-gap --repeat N                    each library effect's smoke case N
+//                times over, the same robot, effect and rates with fresh noise and path: how
+//                far the estimates scatter against the sigmas reported with them
 //
 // --quick: the battery's representative subset and a few runs of the second generator's
 // smoke range (not the validation seeds); nothing is judged. Exit codes: 0 done and (with the
@@ -308,6 +311,40 @@ void report_earlier_set(const std::string& set, unsigned jobs, const std::string
               met ? "all met" : "missed");
 }
 
+// Each library effect's first smoke case (the smoke range: nothing of the validation sets),
+// `repeats` times with seeds of its own, then per hidden parameter its scatter against its
+// reported sigma.
+void report_repeats(unsigned repeats, unsigned jobs) {
+  namespace sr = swivel::second;
+  std::vector<sr::ValidationCase> cases;
+  const std::size_t effects = sr::library_case_effects().size();
+  for (std::size_t i = 0; i < effects; ++i) {
+    const sr::ValidationCase base = sr::library_case(sr::kSmokeSeeds.library, i);
+    for (unsigned k = 1; k <= repeats; ++k) {
+      sr::ValidationCase c = base;
+      c.spec.seed = base.spec.seed * 1000 + k;  // 6001001...: no set's range
+      c.id = base.id + "#" + std::to_string(k);
+      cases.push_back(c);
+    }
+  }
+  const std::vector<CaseOutcome> outcomes = run_all("repeats", validation_jobs(cases), jobs);
+  std::printf("\n==== library effects, each case %u times with fresh noise and path ====\n",
+              repeats);
+  std::printf("%-24s %-9s %-44s %3s %12s %10s %10s %7s %6s %8s\n", "case", "robot", "parameter",
+              "n", "truth", "scatter", "sigma", "ratio", "rms z", "within 1");
+  for (std::size_t i = 0; i < effects; ++i) {
+    const auto first = outcomes.begin() + static_cast<std::ptrdiff_t>(i * repeats);
+    const std::vector<CaseOutcome> of(first, first + repeats);
+    const sr::ValidationCase& c = cases[i * repeats];
+    for (const validation::RepeatSpread& s : validation::repeat_spread(of)) {
+      std::printf("%-24s %-9s %-44s %3zu %12.6g %10.2g %10.2g %7.2f %6.2f %7.0f%%\n",
+                  c.id.substr(0, c.id.find('#')).c_str(), c.spec.design.c_str(),
+                  (s.effect + "." + s.key).c_str(), s.n, s.truth, s.scatter, s.mean_sigma,
+                  s.scatter_over_sigma(), s.rms_deviation, 100.0 * s.within_1_sigma.value());
+    }
+  }
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"The model-gap workflow on development and validation runs, with targets"};
   std::string set = "both";
@@ -316,10 +353,15 @@ int run(int argc, char** argv) {
   bool subset = false;
   unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::string> ids;
+  std::vector<std::string> sets = {"development", "validation", "both"};
+  std::vector<std::string> earlier;  // the earlier validation sets, development data now
+  for (const std::string& name : swivel::second::seed_set_names()) {
+    if (name.ends_with("-validation")) earlier.push_back(name);
+  }
+  sets.insert(sets.end(), earlier.begin(), earlier.end());
   app.add_option("--set", set,
-                 "development, validation, first-, second- or third-validation, or both")
-      ->check(CLI::IsMember({"development", "validation", "first-validation", "second-validation",
-                             "third-validation", "both"}));
+                 "development, validation, first- to third-validation (earlier sets), or both")
+      ->check(CLI::IsMember(sets));
   app.add_flag("--quick", quick,
                "smoke test: the battery's subset and a few smoke-range runs; nothing judged");
   app.add_option("--jobs", jobs, "parallel runs (default: the hardware's threads)")
@@ -327,6 +369,11 @@ int run(int argc, char** argv) {
   app.add_flag("--battery", battery_flag, "the development set only (as --set development)");
   app.add_flag("--subset", subset, "with --battery: the representative subset only");
   app.add_option("--case", ids, "a development case by id (repeatable)");
+  unsigned repeats = 0;
+  app.add_option("--repeat", repeats,
+                 "each library effect's smoke case this many times with fresh noise: the "
+                 "estimates' scatter against their sigmas")
+      ->check(CLI::Range(2U, 1000U));
   std::string quantiles_path;
   app.add_option("--null-quantiles", quantiles_path,
                  "write the clean validation runs' candidate z with their normal quantiles here "
@@ -337,6 +384,10 @@ int run(int argc, char** argv) {
   if (battery_flag) set = "development";
   if (subset) quick = true;
 
+  if (repeats > 0) {
+    report_repeats(repeats, jobs);
+    return 0;
+  }
   if (!ids.empty()) {
     std::vector<swivel::independent::BatteryCase> cases;
     for (const auto& id : ids) {
@@ -357,7 +408,7 @@ int run(int argc, char** argv) {
   std::printf("swivel-bench-model-gap --set %s%s --jobs %u\n", set.c_str(), quick ? " --quick" : "",
               jobs);
   namespace sr = swivel::second;
-  if (set == "first-validation" || set == "second-validation" || set == "third-validation") {
+  if (std::find(earlier.begin(), earlier.end(), set) != earlier.end()) {
     report_earlier_set(set, jobs, quantiles_path);
     return 0;
   }

@@ -143,6 +143,51 @@ bool all_met(const std::vector<TargetResult>& results) {
   return std::all_of(results.begin(), results.end(), [](const TargetResult& t) { return t.met; });
 }
 
+double RepeatSpread::scatter_over_sigma() const {
+  return mean_sigma > 0.0 ? scatter / mean_sigma : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<RepeatSpread> repeat_spread(const std::vector<battery::CaseOutcome>& repeats) {
+  std::vector<std::vector<battery::ParamCheck>> groups;
+  for (const battery::CaseOutcome& o : repeats) {
+    for (const battery::ParamCheck& p : o.params) {
+      if (!p.observable()) continue;
+      auto g = std::find_if(groups.begin(), groups.end(), [&p](const auto& x) {
+        return x.front().effect == p.effect && x.front().key == p.key;
+      });
+      if (g == groups.end()) {
+        groups.push_back({p});
+      } else {
+        g->push_back(p);
+      }
+    }
+  }
+  std::vector<RepeatSpread> out;
+  for (const auto& g : groups) {
+    RepeatSpread s;
+    s.effect = g.front().effect;
+    s.key = g.front().key;
+    s.truth = g.front().truth;
+    s.n = g.size();
+    const auto n = static_cast<double>(g.size());
+    double sigma2 = 0.0;
+    double z2 = 0.0;
+    for (const battery::ParamCheck& p : g) {
+      s.mean_value += p.value / n;
+      sigma2 += p.sigma * p.sigma / n;
+      z2 += p.deviation() * p.deviation() / n;
+      s.within_1_sigma.add(p.deviation() <= 1.0);
+    }
+    double scatter2 = 0.0;
+    for (const battery::ParamCheck& p : g) scatter2 += std::pow(p.value - s.mean_value, 2);
+    s.scatter = g.size() > 1 ? std::sqrt(scatter2 / (n - 1.0)) : 0.0;
+    s.mean_sigma = std::sqrt(sigma2);
+    s.rms_deviation = std::sqrt(z2);
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
 double normal_quantile(double p) {
   double lo = -40.0;
   double hi = 40.0;

@@ -96,4 +96,24 @@ bool all_met(const std::vector<TargetResult>& results);
 /// The standard normal's quantile at probability p (0 < p < 1), by bisection on std::erfc.
 double normal_quantile(double p);
 
+/// One hidden parameter over repeats of a run that differ only in their noise and path: how
+/// far its estimates scatter, against the sigma reported with them. A calibrated sigma has
+/// scatter_over_sigma() near 1; the coverage figures of a set cannot tell a sigma twice too
+/// wide from bias on a few runs, the repeats can.
+struct RepeatSpread {
+  std::string effect;
+  std::string key;
+  double truth = 0.0;
+  std::size_t n = 0;  ///< repeats on which it was named and observable
+  double mean_value = 0.0;
+  double scatter = 0.0;        ///< sample standard deviation of the estimates
+  double mean_sigma = 0.0;     ///< the reported sigmas' root mean square
+  double rms_deviation = 0.0;  ///< of (value - truth) / sigma
+  Proportion within_1_sigma;
+  [[nodiscard]] double scatter_over_sigma() const;
+};
+
+/// Per hidden parameter (by effect and key, in order of first appearance) over `repeats`.
+std::vector<RepeatSpread> repeat_spread(const std::vector<battery::CaseOutcome>& repeats);
+
 }  // namespace swivel::model_gap::validation

@@ -192,5 +192,32 @@ TEST(BenchStatistics, CoverageOutsideItsBandIsMissed) {
   EXPECT_TRUE(t[4].met);
 }
 
+// Repeats of one run: the estimates of a scale scatter by 0.001 about 1.02 while the reported
+// sigma is 0.002, twice too wide; a parameter not observable on one repeat is left out there,
+// and one of another effect is grouped on its own.
+TEST(BenchStatistics, RepeatsCompareTheEstimatesScatterWithTheirSigma) {
+  std::vector<battery::CaseOutcome> repeats;
+  const double offsets[] = {-0.001, 0.001, -0.001, 0.001};
+  for (double d : offsets) {
+    battery::CaseOutcome o;
+    o.params.push_back({"wheel_radius", "left_scale", 1.02, 1.02 + d, 0.002});
+    o.params.push_back({"track_width", "scale", 1.0, 1.0, d > 0 ? 0.01 : INFINITY});
+    repeats.push_back(o);
+  }
+  const std::vector<validation::RepeatSpread> s = validation::repeat_spread(repeats);
+  ASSERT_EQ(s.size(), 2U);
+  EXPECT_EQ(s[0].effect, "wheel_radius");
+  EXPECT_EQ(s[0].n, 4U);
+  EXPECT_NEAR(s[0].mean_value, 1.02, 1e-12);
+  EXPECT_NEAR(s[0].scatter, 0.001 * std::sqrt(4.0 / 3.0), 1e-12);  // sample deviation
+  EXPECT_NEAR(s[0].mean_sigma, 0.002, 1e-12);
+  EXPECT_NEAR(s[0].scatter_over_sigma(), 0.5 * std::sqrt(4.0 / 3.0), 1e-9);
+  EXPECT_NEAR(s[0].rms_deviation, 0.5, 1e-9);
+  EXPECT_EQ(s[0].within_1_sigma.hits, 4U);
+  EXPECT_EQ(s[1].key, "scale");
+  EXPECT_EQ(s[1].n, 2U);  // observable on two of the four
+  EXPECT_DOUBLE_EQ(s[1].scatter, 0.0);
+}
+
 }  // namespace
 }  // namespace swivel::model_gap
