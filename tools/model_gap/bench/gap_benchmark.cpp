@@ -345,6 +345,32 @@ void report_repeats(unsigned repeats, unsigned jobs) {
   }
 }
 
+// The earlier validation sets' names (development data now), as --set takes them.
+std::vector<std::string> earlier_sets() {
+  std::vector<std::string> out;
+  for (const std::string& name : swivel::second::seed_set_names()) {
+    if (name.ends_with("-validation")) out.push_back(name);
+  }
+  return out;
+}
+
+// Development cases by id (--case); a usage error for an unknown one.
+int report_development_cases(const std::vector<std::string>& ids, unsigned jobs) {
+  std::vector<swivel::independent::BatteryCase> cases;
+  for (const auto& id : ids) {
+    const auto* c = swivel::independent::find_case(id);
+    if (c == nullptr) {
+      std::fprintf(stderr,
+                   "swivel-bench-model-gap: no battery case '%s' (swivel-independent-run --list)\n",
+                   id.c_str());
+      return swivel::cli::kUsageError;
+    }
+    cases.push_back(*c);
+  }
+  report("development cases", run_all("development", development_jobs(cases), jobs), false);
+  return 0;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"The model-gap workflow on development and validation runs, with targets"};
   std::string set = "both";
@@ -353,11 +379,8 @@ int run(int argc, char** argv) {
   bool subset = false;
   unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::string> ids;
+  const std::vector<std::string> earlier = earlier_sets();
   std::vector<std::string> sets = {"development", "validation", "both"};
-  std::vector<std::string> earlier;  // the earlier validation sets, development data now
-  for (const std::string& name : swivel::second::seed_set_names()) {
-    if (name.ends_with("-validation")) earlier.push_back(name);
-  }
   sets.insert(sets.end(), earlier.begin(), earlier.end());
   app.add_option("--set", set,
                  "development, validation, first- to third-validation (earlier sets), or both")
@@ -388,22 +411,7 @@ int run(int argc, char** argv) {
     report_repeats(repeats, jobs);
     return 0;
   }
-  if (!ids.empty()) {
-    std::vector<swivel::independent::BatteryCase> cases;
-    for (const auto& id : ids) {
-      const auto* c = swivel::independent::find_case(id);
-      if (c == nullptr) {
-        std::fprintf(
-            stderr,
-            "swivel-bench-model-gap: no battery case '%s' (swivel-independent-run --list)\n",
-            id.c_str());
-        return swivel::cli::kUsageError;
-      }
-      cases.push_back(*c);
-    }
-    report("development cases", run_all("development", development_jobs(cases), jobs), false);
-    return 0;
-  }
+  if (!ids.empty()) return report_development_cases(ids, jobs);
 
   std::printf("swivel-bench-model-gap --set %s%s --jobs %u\n", set.c_str(), quick ? " --quick" : "",
               jobs);
