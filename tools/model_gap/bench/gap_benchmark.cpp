@@ -318,8 +318,8 @@ void report_repeats(unsigned repeats, unsigned jobs) {
   namespace sr = swivel::second;
   std::vector<sr::ValidationCase> cases;
   const std::size_t effects = sr::library_case_effects().size();
-  for (std::size_t i = 0; i < effects; ++i) {
-    const sr::ValidationCase base = sr::library_case(sr::kSmokeSeeds.library, i);
+  // The smoke range's first case of each effect, in the benchmark's order.
+  for (const sr::ValidationCase& base : sr::validation_set(sr::kSmokeSeeds, 0, effects, 0)) {
     for (unsigned k = 1; k <= repeats; ++k) {
       sr::ValidationCase c = base;
       c.spec.seed = base.spec.seed * 1000 + k;  // 6001001...: no set's range
