@@ -362,21 +362,92 @@ std::vector<double> satterthwaite_windows(const std::vector<double>& jacobian, s
 
 }  // namespace
 
+namespace {
+
+constexpr auto kNoRow = static_cast<std::size_t>(-1);
+
+// Newey and West's lagged products of the windows' scores with Bartlett weights, 1 - l/(L+1):
+// consecutive windows' relative motions share the pose between them, with opposite signs, and
+// what the replay leaves of a manoeuvre (creep while speeding up, given back while slowing
+// down) cancels over a few windows. The products of each window's score alone count both as
+// independent noise, several times what reaches the estimate. The weights keep omega positive
+// semi-definite.
+void add_score_lags(const Eigen::MatrixXd& scores, const std::vector<char>& used, std::size_t lags,
+                    Eigen::MatrixXd& omega) {
+  const auto windows = static_cast<std::size_t>(scores.cols());
+  for (std::size_t l = 1; l <= lags && l < windows; ++l) {
+    const double weight = 1.0 - static_cast<double>(l) / static_cast<double>(lags + 1);
+    Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(scores.rows(), scores.rows());
+    for (std::size_t j = l; j < windows; ++j) {
+      if (used[j] == 0 || used[j - l] == 0) continue;
+      cross.noalias() += scores.col(static_cast<Eigen::Index>(j)) *
+                         scores.col(static_cast<Eigen::Index>(j - l)).transpose();
+    }
+    omega += weight * (cross + cross.transpose());
+  }
+}
+
+// One channel's fitted decay c phi^l (the lag's share of its variance) in omega, where the
+// scores' own lags do not hold it: the part their Bartlett weights leave out, l / (L + 1), and
+// every lag past them. `rows`: the channel's row in each window, kNoRow where it has none.
+void add_channel_decay(const std::vector<double>& jacobian, std::size_t p,
+                       const std::vector<double>& r, const std::vector<std::size_t>& rows,
+                       std::size_t score_lags, Eigen::MatrixXd& omega) {
+  const auto pp = static_cast<Eigen::Index>(p);
+  const std::size_t window_count = rows.size();
+  std::vector<double> series(window_count, std::numeric_limits<double>::quiet_NaN());
+  double s2 = 0.0;
+  double n = 0.0;
+  for (std::size_t j = 0; j < window_count; ++j) {
+    if (rows[j] == kNoRow) continue;
+    series[j] = r[rows[j]];
+    s2 += series[j] * series[j];
+    n += 1.0;
+  }
+  const Autocorrelation ac = fit_autocorrelation(series);
+  if (ac.c <= 0.0 || n == 0.0) return;
+  s2 /= n;
+  for (std::size_t l = 1; l < window_count; ++l) {
+    const double decay = ac.c * std::pow(ac.phi, static_cast<double>(l));
+    if (decay <= 1e-4) break;
+    const double weight = l <= score_lags
+                              ? decay * static_cast<double>(l) / static_cast<double>(score_lags + 1)
+                              : decay;
+    Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(pp, pp);
+    for (std::size_t j = l; j < window_count; ++j) {
+      const std::size_t a = rows[j];
+      const std::size_t b = rows[j - l];
+      if (a == kNoRow || b == kNoRow) continue;
+      const Eigen::Map<const Eigen::VectorXd> ja(jacobian.data() + a * p, pp);
+      const Eigen::Map<const Eigen::VectorXd> jb(jacobian.data() + b * p, pp);
+      cross.noalias() += ja * jb.transpose();
+    }
+    omega += weight * s2 * (cross + cross.transpose());
+  }
+}
+
+}  // namespace
+
+std::size_t newey_west_lags(std::size_t windows) {
+  return static_cast<std::size_t>(
+      std::floor(4.0 * std::pow(static_cast<double>(windows) / 100.0, 2.0 / 9.0)));
+}
+
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
-                                        bool scale_free, std::vector<double>* effective_windows) {
+                                        bool scale_free, std::size_t score_lags,
+                                        std::vector<double>* effective_windows) {
   const auto pp = static_cast<Eigen::Index>(p);
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
   Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
   std::size_t groups = 0;
   for (std::size_t g : row_group) groups = std::max(groups, g + 1);
-  // Per group: its rows by window (npos where it has none).
-  constexpr auto kNone = static_cast<std::size_t>(-1);
+  // Per group: its rows by window (kNoRow where it has none).
   std::vector<std::vector<std::size_t>> rows_of(groups,
-                                                std::vector<std::size_t>(window_count, kNone));
+                                                std::vector<std::size_t>(window_count, kNoRow));
   std::vector<char> used(window_count, 0);
   for (std::size_t i = 0; i < r.size(); ++i) {
     if (!std::isfinite(r[i])) continue;
@@ -387,34 +458,9 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
     rows_of[row_group[i]][row_window[i]] = i;
   }
   Eigen::MatrixXd omega = scores * scores.transpose();
-  for (std::size_t g = 0; g < groups; ++g) {
-    std::vector<double> series(window_count, std::numeric_limits<double>::quiet_NaN());
-    double s2 = 0.0;
-    double n = 0.0;
-    for (std::size_t j = 0; j < window_count; ++j) {
-      if (rows_of[g][j] == kNone) continue;
-      series[j] = r[rows_of[g][j]];
-      s2 += series[j] * series[j];
-      n += 1.0;
-    }
-    const Autocorrelation ac = fit_autocorrelation(series);
-    if (ac.c <= 0.0 || n == 0.0) continue;
-    s2 /= n;
-    for (std::size_t l = 1; l < window_count; ++l) {
-      // c phi^l: the lag's share of the variance.
-      const double weight = ac.c * std::pow(ac.phi, static_cast<double>(l));
-      if (weight <= 1e-4) break;
-      Eigen::MatrixXd cross = Eigen::MatrixXd::Zero(pp, pp);
-      for (std::size_t j = l; j < window_count; ++j) {
-        const std::size_t a = rows_of[g][j];
-        const std::size_t b = rows_of[g][j - l];
-        if (a == kNone || b == kNone) continue;
-        const Eigen::Map<const Eigen::VectorXd> ja(jacobian.data() + a * p, pp);
-        const Eigen::Map<const Eigen::VectorXd> jb(jacobian.data() + b * p, pp);
-        cross.noalias() += ja * jb.transpose();
-      }
-      omega += weight * s2 * (cross + cross.transpose());
-    }
+  add_score_lags(scores, used, score_lags, omega);
+  for (const std::vector<std::size_t>& rows : rows_of) {
+    add_channel_decay(jacobian, p, r, rows, score_lags, omega);
   }
   const double windows = static_cast<double>(std::count(used.begin(), used.end(), 1));
   if (windows > static_cast<double>(p) + 1.0) omega *= windows / (windows - static_cast<double>(p));
@@ -425,6 +471,13 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   const Eigen::MatrixXd cov = inverse * omega * inverse;
   if (effective_windows != nullptr) {
     *effective_windows = satterthwaite_windows(jacobian, p, r, row_window, window_count, inverse);
+    // Lagged products make a variance spread over the run rest on fewer independent pieces:
+    // about 1.5 T / S of them for the Bartlett kernel over S = lags + 1 windows (Andrews
+    // 1991). One that rests on a few windows apart keeps their count.
+    if (score_lags > 0) {
+      const double pieces = 1.5 * windows / static_cast<double>(score_lags + 1);
+      for (double& w : *effective_windows) w = std::min(w, pieces);
+    }
   }
   observable.assign(p, 1);
   std::vector<double> out(p * p);
@@ -568,9 +621,9 @@ void robust_covariance(const FitProblem& problem, const std::vector<double>& den
   const std::size_t p = specs.size();
   std::vector<std::size_t> groups = problem.row_group;
   if (groups.empty()) groups.assign(problem.row_count, 0);
-  const std::vector<double> cov_z =
-      sandwich_covariance(dense, p, out.residuals, problem.row_window, groups, problem.window_count,
-                          out.observable, scale_free, &out.effective_windows);
+  const std::vector<double> cov_z = sandwich_covariance(
+      dense, p, out.residuals, problem.row_window, groups, problem.window_count, out.observable,
+      scale_free, newey_west_lags(problem.window_count), &out.effective_windows);
   // The same, as if the rows were independent.
   naive_covariance(dense, specs, scale_free, out);
   out.covariance.assign(p * p, 0.0);

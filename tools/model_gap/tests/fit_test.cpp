@@ -293,13 +293,55 @@ TEST(FitTest, TheWindowsACoefficientRestsOnAreCounted) {
   std::vector<char> observable;
   std::vector<double> effective;
   (void)sandwich_covariance(jacobian, 2, residuals, row_window, row_group, kWindows, observable,
-                            false, &effective);
+                            false, 0, &effective);
   ASSERT_EQ(effective.size(), 2U);
   EXPECT_NEAR(effective[0], kWindows - 2.0, 5.0);
   EXPECT_GT(effective[1], 5.0);  // a little more: the constant's estimate enters it too
   EXPECT_LT(effective[1], 6.0);
   EXPECT_EQ(fewest_windows(effective, 0, 2), effective[1]);
   EXPECT_EQ(fewest_windows(effective, 0, 1), effective[0]);
+}
+
+// The variance of a mean over windows whose residuals are the differences of one noisy pose,
+// r_w = n_(w+1) - n_w (consecutive relative motions share the pose between them): with each
+// window's score counted alone it is 2 sigma^2 / T, several times too much (the pose noise
+// telescopes). Three lags of the scores with Bartlett weights leave 2 sigma^2 / (4 T), and
+// leave white residuals' variance as it was.
+double mean_variance(const std::vector<double>& residuals, std::size_t lags) {
+  const std::vector<double> jacobian(residuals.size(), 1.0);
+  std::vector<std::size_t> row_window(residuals.size());
+  for (std::size_t w = 0; w < row_window.size(); ++w) row_window[w] = w;
+  const std::vector<std::size_t> row_group(residuals.size(), 0);
+  std::vector<char> observable;
+  return sandwich_covariance(jacobian, 1, residuals, row_window, row_group, residuals.size(),
+                             observable, false, lags)[0];
+}
+
+TEST(FitTest, LaggedScoresCountAPoseSharedByConsecutiveWindowsOnce) {
+  constexpr std::size_t kWindows = 400;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<double> pose(kWindows + 1);
+  for (double& n : pose) n = gauss(rng);
+  std::vector<double> differenced(kWindows);
+  std::vector<double> white(kWindows);
+  for (std::size_t w = 0; w < kWindows; ++w) {
+    differenced[w] = pose[w + 1] - pose[w];
+    white[w] = gauss(rng);
+  }
+  const double shrink = mean_variance(differenced, 3) / mean_variance(differenced, 0);
+  EXPECT_GT(shrink, 0.15);
+  EXPECT_LT(shrink, 0.4);
+  const double white_ratio = mean_variance(white, 3) / mean_variance(white, 0);
+  EXPECT_GT(white_ratio, 0.7);
+  EXPECT_LT(white_ratio, 1.3);
+}
+
+TEST(FitTest, NeweyWestBandwidthGrowsSlowlyWithTheWindows) {
+  EXPECT_EQ(newey_west_lags(10), 2U);
+  EXPECT_EQ(newey_west_lags(78), 3U);  // an 80 s run of 1 s windows
+  EXPECT_EQ(newey_west_lags(100), 4U);
+  EXPECT_EQ(newey_west_lags(1000), 6U);
 }
 
 TEST(FitTest, MahalanobisUsesOnlyTheObservableSubspace) {

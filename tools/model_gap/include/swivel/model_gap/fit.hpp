@@ -102,6 +102,9 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
 /// flags the parameters the rows determine.
 /// `scale_free`: judge the combinations not fixed on the information scaled to a unit diagonal
 /// (ParamSpec::scale_free), else against the largest eigenvalue in the parameters' own units.
+/// `score_lags`: how many lags of the windows' scores enter the middle of the sandwich
+/// (Newey-West, Bartlett weights); past them, each channel's fitted first-order decay. 0: the
+/// windows' scores as independent.
 /// `effective_windows` (when given): per coefficient, the number of windows its variance in
 /// effect rests on (Satterthwaite), the second degree of freedom of wald_f_z().
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
@@ -109,8 +112,12 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
-                                        bool scale_free = false,
+                                        bool scale_free = false, std::size_t score_lags = 0,
                                         std::vector<double>* effective_windows = nullptr);
+
+/// Newey and West's (1994) bandwidth for `windows` windows, 4 (T/100)^(2/9) lags rounded down:
+/// 3 for an 80 s run of 1 s windows.
+std::size_t newey_west_lags(std::size_t windows);
 
 /// Significance of a chi-square statistic with `dof` degrees of freedom as the equivalent
 /// normal deviate (from the exact upper tail, the regularized incomplete gamma function):
