@@ -145,12 +145,17 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "first-validation") return &kFirstValidationSeeds;
   if (name == "second-validation") return &kSecondValidationSeeds;
   if (name == "third-validation") return &kThirdValidationSeeds;
+  if (name == "fourth-validation") return &kFourthValidationSeeds;
   return nullptr;
 }
 
 const std::vector<std::string>& seed_set_names() {
-  static const std::vector<std::string> names = {"smoke", "validation", "first-validation",
-                                                 "second-validation", "third-validation"};
+  static const std::vector<std::string> names = {"smoke",
+                                                 "validation",
+                                                 "first-validation",
+                                                 "second-validation",
+                                                 "third-validation",
+                                                 "fourth-validation"};
   return names;
 }
 

@@ -352,8 +352,8 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   EXPECT_GE(high, 95.0);
   EXPECT_EQ(effects.size(), 11U);
   // The smoke set and the earlier validation sets (development data now) are other ranges.
-  for (const SeedRanges& other :
-       {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds}) {
+  for (const SeedRanges& other : {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds,
+                                  kThirdValidationSeeds, kFourthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -376,7 +376,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("first-validation"), &kFirstValidationSeeds);
   EXPECT_EQ(seed_ranges_named("second-validation"), &kSecondValidationSeeds);
   EXPECT_EQ(seed_ranges_named("third-validation"), &kThirdValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("fourth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("fourth-validation"), &kFourthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("fifth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
