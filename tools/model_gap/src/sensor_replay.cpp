@@ -28,6 +28,11 @@ constexpr double kAtLimitShare = 0.9;
 // second generator's clean caster runs stay within 1.4 times the median; those where the
 // sensor question saw jumps of 9-28 sigma lie at 1.9-42 times it.
 constexpr double kScrubMisfitFactor = 1.5;
+// How far they must disagree for a window to count as scrubbing whatever the steering does: a
+// caster that steers late (actuator or steering lag, late feedback) or is held at a lower
+// limit than the model states scrubs where nothing reaches the stated limit. Far above the
+// 1.4 times the median the clean runs' windows stay within.
+constexpr double kScrubAloneFactor = 4.0;
 
 // A caster module's steering angle (mid-row, offset applied), steering rate and wheel rate
 // over row k, from the encoders.
@@ -80,27 +85,27 @@ WindowSteering window_steering(const sim::PlantParams& plant, const RunData& run
   return out;
 }
 
-// Per window: some caster's steering rate over one of its rows reached kAtLimitShare of
-// the model's stated limit (none when the model states none), and the casters disagreed
-// about the motion kScrubMisfitFactor times as much as in the run's median window.
+// Per window: the casters disagreed about the motion kScrubMisfitFactor times as much as in
+// the run's median window while some caster's steering rate over one of its rows reached
+// kAtLimitShare of the limit (the model's stated one, or the fastest the run steers where
+// that is lower or none is stated), or kScrubAloneFactor times as much whatever the steering.
 std::vector<char> windows_held_and_scrubbing(const RobotModel& nominal, const RunData& run,
                                              const std::vector<Window>& windows) {
   std::vector<char> out(windows.size(), 0);
-  if (run.drivetrain != DrivetrainKind::kSwpc || !nominal.limits.steering_rate_radps ||
-      windows.empty()) {
-    return out;
-  }
+  if (run.drivetrain != DrivetrainKind::kSwpc || windows.empty()) return out;
   const WindowSteering steering = window_steering(sim::resolve_plant(nominal), run, windows);
+  const double run_peak = *std::max_element(steering.peak_steer_rate_radps.begin(),
+                                            steering.peak_steer_rate_radps.end());
+  const double limit = std::min(nominal.limits.steering_rate_radps.value_or(run_peak), run_peak);
   std::vector<double> sorted = steering.disagreement_m;
   const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
   std::nth_element(sorted.begin(), mid, sorted.end());
-  const double scrubbing = kScrubMisfitFactor * *mid;
-  const double at_limit = kAtLimitShare * *nominal.limits.steering_rate_radps;
+  const double median = *mid;
+  const double at_limit = kAtLimitShare * limit;
   for (std::size_t j = 0; j < windows.size(); ++j) {
-    out[j] =
-        steering.disagreement_m[j] >= scrubbing && steering.peak_steer_rate_radps[j] >= at_limit
-            ? 1
-            : 0;
+    const bool held = steering.peak_steer_rate_radps[j] >= at_limit;
+    const double d = steering.disagreement_m[j];
+    out[j] = (d >= kScrubMisfitFactor * median && held) || d >= kScrubAloneFactor * median ? 1 : 0;
   }
   return out;
 }

@@ -325,9 +325,9 @@ void record_run(const RunData& run, const SensorReplay& sensors, GapResult& resu
   if (held > 0) {
     result.notes.emplace_back(
         std::to_string(held) + " of " + std::to_string(w) +
-        " windows are not compared in the sensor question: a caster steered at the model's "
-        "rate limit in them, held back from the angle its motion needs, and the casters "
-        "disagreed about the motion (a tyre scrubbed sideways), which the kinematics cannot "
+        " windows are not compared in the sensor question: the casters disagreed about the "
+        "motion in them (a tyre scrubbed sideways), held back from the angles the motion "
+        "needs at a steering rate limit or steering late, which the kinematics cannot "
         "hold.");
   }
   if (w < 10) {

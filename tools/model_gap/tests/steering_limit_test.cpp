@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Casters held at the steering rate limit the model states (runs of the second robot
-// generator, whose casters are servo-driven and whose tyres scrub by force): the sensor
-// question does not compare the windows where they scrubbed, and a clean run shows no gap.
+// Casters held at a steering rate limit or steering late (runs of the second robot generator,
+// whose casters are servo-driven and whose tyres scrub by force): the sensor question does not
+// compare the windows where they scrubbed, and a clean run shows no gap.
 
 #include <gtest/gtest.h>
 
@@ -56,13 +56,37 @@ TEST(SteeringLimit, WindowsWhereCastersSteerAtTheStatedLimitAreNotCompared) {
       gap.notes, [](const std::string& n) { return n.find("rate limit") != std::string::npos; }));
 }
 
-// A model that states no limit leaves every window compared: nothing tells where the casters
-// were held.
-TEST(SteeringLimit, AModelWithoutALimitComparesEveryWindow) {
+// A model that states no limit: the fastest the run steers stands for it, and the windows where
+// the casters were held there and scrubbed are left out as with the stated limit.
+TEST(SteeringLimit, AModelWithoutALimitTakesTheRunsFastestSteeringForIt) {
   SecondRun clean = first_set_clean_run(163);
+  const SensorReplay stated(clean.model, clean.run, 1.0);
   clean.model.limits.steering_rate_radps.reset();
-  const SensorReplay sensors(clean.model, clean.run, 1.0);
-  EXPECT_EQ(count_held_windows(sensors), 0U);
+  const SensorReplay unstated(clean.model, clean.run, 1.0);
+  for (std::size_t j = 0; j < stated.windows().size(); ++j) {
+    if (stated.held_and_scrubbing()[j] != 0) {
+      EXPECT_NE(unstated.held_and_scrubbing()[j], 0) << "window " << j;
+    }
+  }
+  EXPECT_LE(count_held_windows(unstated), unstated.windows().size() / 10);
+}
+
+// trike3 whose true steering limit is 2.35 rad/s where its model states 6 (a library run of the
+// first validation set, development data now): its casters are held at 2.35 and scrub in
+// windows whose steering reaches 0.9 of neither the stated limit nor the run's fastest (the
+// servo overshoots to 2.85). Where the casters disagreed 5 and 12 times as much as in the
+// median window the sensor question saw jumps of 11 sigma in dx; those windows are left out,
+// and the sensor question finds no gap, as it should for a command-side effect.
+TEST(SteeringLimit, CastersHeldAtALowerLimitThanStatedScrubAndAreNotCompared) {
+  const second::ValidationCase c = second::library_case(second::kFirstValidationSeeds.library, 66);
+  ASSERT_EQ(c.expected.size(), 1U);
+  ASSERT_EQ(c.expected[0].effect, "steering_rate_limit");
+  const SecondRun run = load_second_run(c.spec, c.id);
+  const SensorReplay sensors(run.model, run.run, 1.0);
+  EXPECT_GE(count_held_windows(sensors), 2U);
+  EXPECT_LE(count_held_windows(sensors), sensors.windows().size() / 5);
+  const GapResult gap = analyse_gap(run.model, run.run);
+  EXPECT_EQ(gap.sensor.verdict, Verdict::kNoSignificantGap) << gap.sensor.summary;
 }
 
 }  // namespace

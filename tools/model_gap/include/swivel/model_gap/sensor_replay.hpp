@@ -33,11 +33,13 @@
 // A run whose truth is the robot's own reference frame (`# truth_frame: robot`, a simulator's)
 // fits neither the yaw offset nor the lever arm.
 //
-// Windows in which a caster steered at the model's stated rate limit and the casters
-// disagreed about the body's motion (the forward kinematics' residual, 1.5 times the run's
-// median window) are not compared: there the controller held a caster back from the angle
-// its motion needs and its tyre scrubbed sideways, which the no-lateral-slip kinematics
-// cannot hold. A robot whose casters keep rolling at the limit keeps those windows.
+// Windows in which the casters scrubbed are not compared: a caster steered at the rate limit
+// (the model's stated one, or the fastest the run steers where that is lower or none is
+// stated) and the casters disagreed about the body's motion (the forward kinematics'
+// residual) 1.5 times as much as in the run's median window, or they disagreed 4 times as
+// much whatever the steering (a caster that steers late). There the casters were off the
+// angles their motion needs and a tyre scrubbed sideways, which the no-lateral-slip
+// kinematics cannot hold. A robot whose casters keep rolling at the limit keeps those windows.
 
 #include <span>
 #include <vector>
@@ -99,8 +101,8 @@ class SensorReplay {
   /// Motion capture at each window's ends (noise averaged, see anchor()).
   [[nodiscard]] const std::vector<Pose2>& anchors_start() const { return anchor_a_; }
   [[nodiscard]] const std::vector<Pose2>& anchors_end() const { return anchor_b_; }
-  /// Per window: a caster steered at the rate limit the model states and the casters
-  /// scrubbed (see above); such windows are not compared.
+  /// Per window: the casters scrubbed, held at a rate limit or steering late (see above);
+  /// such windows are not compared.
   [[nodiscard]] const std::vector<char>& held_and_scrubbing() const { return held_and_scrubbing_; }
   /// Start pose: motion capture averaged while the robot stands at the start (up to 1 s).
   [[nodiscard]] const Pose2& start_pose() const { return start_; }
