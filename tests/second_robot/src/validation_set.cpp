@@ -146,6 +146,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "second-validation") return &kSecondValidationSeeds;
   if (name == "third-validation") return &kThirdValidationSeeds;
   if (name == "fourth-validation") return &kFourthValidationSeeds;
+  if (name == "fifth-validation") return &kFifthValidationSeeds;
   return nullptr;
 }
 
@@ -155,7 +156,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "first-validation",
                                                  "second-validation",
                                                  "third-validation",
-                                                 "fourth-validation"};
+                                                 "fourth-validation",
+                                                 "fifth-validation"};
   return names;
 }
 

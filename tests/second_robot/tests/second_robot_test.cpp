@@ -352,8 +352,9 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   EXPECT_GE(high, 95.0);
   EXPECT_EQ(effects.size(), 11U);
   // The smoke set and the earlier validation sets (development data now) are other ranges.
-  for (const SeedRanges& other : {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds,
-                                  kThirdValidationSeeds, kFourthValidationSeeds}) {
+  for (const SeedRanges& other :
+       {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
+        kFourthValidationSeeds, kFifthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -377,7 +378,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("second-validation"), &kSecondValidationSeeds);
   EXPECT_EQ(seed_ranges_named("third-validation"), &kThirdValidationSeeds);
   EXPECT_EQ(seed_ranges_named("fourth-validation"), &kFourthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("fifth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("fifth-validation"), &kFifthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("sixth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
