@@ -10,8 +10,8 @@
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
 //   first- to fifth-validation  the same cases from the earlier validation sets' seeds
 //                (7340001..., 28880001..., 72548103..., 26341837..., 98462895...), looked at
-//                after changes and are development data now: reported with the targets beside them, never
-//                judged (only with --set first-validation etc.).
+//                after changes and are development data now: reported with the targets beside them,
+//                never judged (only with --set first-validation etc.).
 //
 //   swivel-bench-model-gap [--set development|validation|first-validation|...|
 //                                 fifth-validation|both] [--quick] [--jobs N]
