@@ -360,10 +360,6 @@ std::vector<double> satterthwaite_windows(const std::vector<double>& jacobian, s
   return out;
 }
 
-}  // namespace
-
-namespace {
-
 constexpr auto kNoRow = static_cast<std::size_t>(-1);
 
 // Newey and West's lagged products of the windows' scores with Bartlett weights, 1 - l/(L+1):
