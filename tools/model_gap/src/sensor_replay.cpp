@@ -33,6 +33,8 @@ constexpr double kScrubMisfitFactor = 1.5;
 // limit than the model states scrubs where nothing reaches the stated limit. Far above the
 // 1.4 times the median the clean runs' windows stay within.
 constexpr double kScrubAloneFactor = 4.0;
+// A wheel that turned by less than this (rad) may only have shown its encoder's noise.
+constexpr double kEncoderNoiseRad = 1e-2;
 
 // A caster module's steering angle (mid-row, offset applied), steering rate and wheel rate
 // over row k, from the encoders.
@@ -46,11 +48,13 @@ void module_rates(const RunData& run, const SwpcModuleParams& m, std::size_t i, 
 }
 
 // Per window, from the encoders: how far the casters disagree about the body's motion (the
-// forward kinematics' RMS equation residual, m/s, integrated over its rows: m) and the
-// fastest any caster steered over one of its rows (rad/s).
+// forward kinematics' RMS equation residual, m/s, integrated over its rows: m), the fastest
+// any caster steered over one of its rows (rad/s) and whether any wheel turned by more than
+// kEncoderNoiseRad over it.
 struct WindowSteering {
   std::vector<double> disagreement_m;
   std::vector<double> peak_steer_rate_radps;
+  std::vector<char> moving;
 };
 
 WindowSteering window_steering(const sim::PlantParams& plant, const RunData& run,
@@ -75,37 +79,51 @@ WindowSteering window_steering(const sim::PlantParams& plant, const RunData& run
     if (fit.ok) disagreement[k] = fit.residual * (run.t_s[k] - run.t_s[k - 1]);
   }
   WindowSteering out{std::vector<double>(windows.size(), 0.0),
-                     std::vector<double>(windows.size(), 0.0)};
+                     std::vector<double>(windows.size(), 0.0),
+                     std::vector<char>(windows.size(), 0)};
   for (std::size_t j = 0; j < windows.size(); ++j) {
     for (std::size_t k = windows[j].a + 1; k <= windows[j].b; ++k) {
       out.disagreement_m[j] += disagreement[k];
       out.peak_steer_rate_radps[j] = std::max(out.peak_steer_rate_radps[j], peak_rate[k]);
+    }
+    for (std::size_t i = 0; i < modules; ++i) {
+      const double turned =
+          std::abs(run.wheel_rad[i][windows[j].b] - run.wheel_rad[i][windows[j].a]);
+      if (turned > kEncoderNoiseRad) out.moving[j] = 1;
     }
   }
   return out;
 }
 
 // Per window: the casters disagreed about the motion kScrubMisfitFactor times as much as in
-// the run's median window while some caster's steering rate over one of its rows reached
-// kAtLimitShare of the limit (the model's stated one, or the fastest the run steers where
-// that is lower or none is stated), or kScrubAloneFactor times as much whatever the steering.
-std::vector<char> windows_held_and_scrubbing(const RobotModel& nominal, const RunData& run,
-                                             const std::vector<Window>& windows) {
+// the run's median moving window while some caster's steering rate over one of its rows
+// reached kAtLimitShare of the limit (the model's stated one, or the fastest the run steers
+// where that is lower or none is stated), or kScrubAloneFactor times as much whatever the
+// steering. The median is over the windows in which a wheel turned: a log that mostly stands
+// still would otherwise have a median of nothing, and every moving window would count.
+std::vector<char> windows_scrubbing(const RobotModel& nominal, const RunData& run,
+                                    const std::vector<Window>& windows) {
   std::vector<char> out(windows.size(), 0);
   if (run.drivetrain != DrivetrainKind::kSwpc || windows.empty()) return out;
   const WindowSteering steering = window_steering(sim::resolve_plant(nominal), run, windows);
+  std::vector<double> moving;
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    if (steering.moving[j] != 0) moving.push_back(steering.disagreement_m[j]);
+  }
+  if (moving.empty()) return out;
+  const auto mid = moving.begin() + static_cast<std::ptrdiff_t>(moving.size() / 2);
+  std::nth_element(moving.begin(), mid, moving.end());
+  const double median = *mid;
   const double run_peak = *std::max_element(steering.peak_steer_rate_radps.begin(),
                                             steering.peak_steer_rate_radps.end());
   const double limit = std::min(nominal.limits.steering_rate_radps.value_or(run_peak), run_peak);
-  std::vector<double> sorted = steering.disagreement_m;
-  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-  std::nth_element(sorted.begin(), mid, sorted.end());
-  const double median = *mid;
   const double at_limit = kAtLimitShare * limit;
   for (std::size_t j = 0; j < windows.size(); ++j) {
     const bool held = steering.peak_steer_rate_radps[j] >= at_limit;
     const double d = steering.disagreement_m[j];
-    out[j] = (d >= kScrubMisfitFactor * median && held) || d >= kScrubAloneFactor * median ? 1 : 0;
+    const bool scrubbing =
+        (d >= kScrubMisfitFactor * median && held) || d >= kScrubAloneFactor * median;
+    out[j] = steering.moving[j] != 0 && scrubbing ? 1 : 0;
   }
   return out;
 }
@@ -142,7 +160,7 @@ Pose2 run_start_pose(const RunData& run) {
   // worth of noise.
   const auto wheels_moved = [&run](std::size_t k) {
     return std::ranges::any_of(run.wheel_rad, [k](const std::vector<double>& wheel) {
-      return std::abs(wheel[k] - wheel[0]) > 1e-2;
+      return std::abs(wheel[k] - wheel[0]) > kEncoderNoiseRad;
     });
   };
   for (std::size_t k = 0; k < run.size(); ++k) {
@@ -224,7 +242,7 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
     anchor_a_.push_back(anchor(run, shape, w.a, kAnchorHalfWidth));
     anchor_b_.push_back(anchor(run, shape, w.b, kAnchorHalfWidth));
   }
-  held_and_scrubbing_ = windows_held_and_scrubbing(nominal, run, windows_);
+  scrubbing_ = windows_scrubbing(nominal, run, windows_);
 }
 
 TruthNuisance SensorReplay::truth(std::span<const double> values) const {
@@ -347,7 +365,7 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   for (std::size_t j = 0; j < used; ++j) {
     const Pose2& ma = anchor_a_[j];
     const Pose2& mb = anchor_b_[j];
-    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || held_and_scrubbing_[j] != 0) continue;
+    if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || scrubbing_[j] != 0) continue;
     const double ta = t[windows_[j].a] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].a]);
     const double tb = t[windows_[j].b] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].b]);
     const Pose2 measured = compose(compose(body, between(ma, mb)), body_inverse);

@@ -321,7 +321,7 @@ void record_run(const RunData& run, const SensorReplay& sensors, GapResult& resu
         ", and sensor_latency, which this question cannot tell from it, is not a candidate.");
   }
   const std::size_t w = sensors.windows().size();
-  const auto held = static_cast<std::size_t>(std::ranges::count(sensors.held_and_scrubbing(), 1));
+  const auto held = static_cast<std::size_t>(std::ranges::count(sensors.scrubbing(), 1));
   if (held > 0) {
     result.notes.emplace_back(
         std::to_string(held) + " of " + std::to_string(w) +

@@ -103,7 +103,7 @@ class SensorReplay {
   [[nodiscard]] const std::vector<Pose2>& anchors_end() const { return anchor_b_; }
   /// Per window: the casters scrubbed, held at a rate limit or steering late (see above);
   /// such windows are not compared.
-  [[nodiscard]] const std::vector<char>& held_and_scrubbing() const { return held_and_scrubbing_; }
+  [[nodiscard]] const std::vector<char>& scrubbing() const { return scrubbing_; }
   /// Start pose: motion capture averaged while the robot stands at the start (up to 1 s).
   [[nodiscard]] const Pose2& start_pose() const { return start_; }
 
@@ -148,7 +148,7 @@ class SensorReplay {
   WindowMotion motion_;
   std::vector<Pose2> anchor_a_;
   std::vector<Pose2> anchor_b_;
-  std::vector<char> held_and_scrubbing_;
+  std::vector<char> scrubbing_;
   // Scratch of the last integration.
   mutable std::vector<Pose2> track_;
   mutable std::vector<double> encoder_yaw_;
