@@ -422,6 +422,21 @@ void add_channel_decay(const std::vector<double>& jacobian, std::size_t p,
   }
 }
 
+// The null space's directions over the coefficients themselves (the split judges them on the
+// information scaled by d), as unit vectors.
+std::vector<std::vector<double>> unfixed_directions(const InformationSplit& split) {
+  std::vector<std::vector<double>> out;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(split.null_space);
+  for (Eigen::Index k = 0; k < eig.eigenvalues().size(); ++k) {
+    if (!(eig.eigenvalues()(k) > 0.5)) continue;  // a projector's eigenvalues are 0 or 1
+    Eigen::VectorXd v = split.d.cwiseProduct(eig.eigenvectors().col(k));
+    if (!(v.norm() > 0.0)) continue;
+    v.normalize();
+    out.emplace_back(v.data(), v.data() + v.size());
+  }
+  return out;
+}
+
 }  // namespace
 
 std::size_t newey_west_lags(std::size_t windows) {
@@ -435,7 +450,8 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
                                         bool scale_free, std::size_t score_lags,
-                                        std::vector<double>* effective_windows) {
+                                        std::vector<double>* effective_windows,
+                                        std::vector<std::vector<double>>* unfixed) {
   const auto pp = static_cast<Eigen::Index>(p);
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(pp, pp);
   Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(pp, static_cast<Eigen::Index>(window_count));
@@ -465,6 +481,7 @@ std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std
   const Eigen::MatrixXd& inverse = split.inverse;
   const Eigen::MatrixXd& null_space = split.null_space;
   const Eigen::MatrixXd cov = inverse * omega * inverse;
+  if (unfixed != nullptr) *unfixed = unfixed_directions(split);
   if (effective_windows != nullptr) {
     *effective_windows = satterthwaite_windows(jacobian, p, r, row_window, window_count, inverse);
     // Lagged products make a variance spread over the run rest on fewer independent pieces:
@@ -619,7 +636,9 @@ void robust_covariance(const FitProblem& problem, const std::vector<double>& den
   if (groups.empty()) groups.assign(problem.row_count, 0);
   const std::vector<double> cov_z = sandwich_covariance(
       dense, p, out.residuals, problem.row_window, groups, problem.window_count, out.observable,
-      scale_free, newey_west_lags(problem.window_count), &out.effective_windows);
+      scale_free, newey_west_lags(problem.window_count), &out.effective_windows, &out.unfixed);
+  out.scales.clear();
+  for (const ParamSpec& s : specs) out.scales.push_back(s.scale);
   // The same, as if the rows were independent.
   naive_covariance(dense, specs, scale_free, out);
   out.covariance.assign(p * p, 0.0);

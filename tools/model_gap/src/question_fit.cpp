@@ -186,6 +186,10 @@ std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& rep
   return sigma;
 }
 
+// A combination not fixed leaves the effects' part of it open when that part is more than
+// this share of it (of its squared length in scaled units), as fit() judges a parameter.
+constexpr double kUnfixedShare = 0.01;
+
 // BIC is counted on the effects' parameters alone, as the nominal model's has its nuisance
 // fitted too.
 FitOutcome effects_part(FitOutcome joint, std::size_t p) {
@@ -200,6 +204,19 @@ FitOutcome effects_part(FitOutcome joint, std::size_t p) {
     }
     m = std::move(out);
   };
+  // A combination not fixed that is mostly nuisance leaves the effects fixed; one with a
+  // sizeable part in the effects (a common steering offset against the motion capture's yaw
+  // offset) leaves that part open, whatever the nuisance was put back to.
+  std::vector<std::vector<double>> open;
+  for (std::vector<double>& u : joint.unfixed) {
+    if (u.size() != all) continue;
+    double share = 0.0;
+    for (std::size_t a = 0; a < p; ++a) share += u[a] * u[a];
+    if (share > kUnfixedShare)
+      open.emplace_back(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(p));
+  }
+  joint.unfixed = std::move(open);
+  keep(joint.scales);
   keep(joint.values);
   keep(joint.sigmas);
   keep(joint.naive_sigmas);

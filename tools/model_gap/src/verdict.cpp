@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The question's verdict (question_stages.hpp): unexplained residual when a misfit test
 // fires, no significant gap when nothing was selected, else the selection named.
+#include <Eigen/Core>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 #include "question_stages.hpp"
 
@@ -62,6 +65,40 @@ std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& optio
          why + ").";
 }
 
+// The effect's parameters [first, first + m) of `fit`: its covariance (m x m) projected off
+// the combinations the run leaves open, which then count as not observable.
+void drop_open_combinations(const FitOutcome& fit, std::size_t first, std::size_t m,
+                            std::vector<double>& covariance) {
+  const auto mm = static_cast<Eigen::Index>(m);
+  Eigen::MatrixXd open(mm, 0);
+  for (const std::vector<double>& u : fit.unfixed) {
+    if (u.size() < first + m || fit.scales.size() < first + m) continue;
+    Eigen::VectorXd part(mm);
+    for (std::size_t k = 0; k < m; ++k) {
+      part(static_cast<Eigen::Index>(k)) = u[first + k] * fit.scales[first + k];
+    }
+    if (!(part.norm() > 0.0)) continue;
+    open.conservativeResize(mm, open.cols() + 1);
+    open.col(open.cols() - 1) = part;
+  }
+  if (open.cols() == 0) return;
+  // Orthonormal basis of the open part, then Q = I - B B'.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(open, Eigen::ComputeThinU);
+  const double top = svd.singularValues().maxCoeff();
+  Eigen::MatrixXd q = Eigen::MatrixXd::Identity(mm, mm);
+  for (Eigen::Index k = 0; k < svd.singularValues().size(); ++k) {
+    if (!(svd.singularValues()(k) > 1e-9 * top)) continue;
+    q -= svd.matrixU().col(k) * svd.matrixU().col(k).transpose();
+  }
+  const Eigen::Map<const Eigen::MatrixXd> c(covariance.data(), mm, mm);
+  const Eigen::MatrixXd projected = q * c * q;
+  for (Eigen::Index a = 0; a < mm; ++a) {
+    for (Eigen::Index b = 0; b < mm; ++b) {
+      covariance[static_cast<std::size_t>(a * mm + b)] = projected(a, b);
+    }
+  }
+}
+
 }  // namespace
 
 FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::size_t e,
@@ -88,8 +125,11 @@ FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::si
     }
     const double res = c.fit_resolution(k, final.fit.values[i]);
     fe.fit_covariance[k * m + k] += res * res;
+  }
+  drop_open_combinations(final.fit, first, m, fe.fit_covariance);
+  for (std::size_t k = 0; k < m; ++k) {
     const double partial = std::sqrt(std::max(fe.fit_covariance[k * m + k], 0.0));
-    fe.partial_sigmas.push_back(c.inverse[k] != 0 ? c.sigma(k, final.fit.values[i], partial)
+    fe.partial_sigmas.push_back(c.inverse[k] != 0 ? c.sigma(k, final.fit.values[first + k], partial)
                                                   : partial);
   }
   std::vector<double> zero(m, 0.0);

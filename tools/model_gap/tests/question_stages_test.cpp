@@ -211,6 +211,61 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
       << result.summary;
 }
 
+// Two steering offsets whose sum the run leaves open beside a nuisance (the motion capture's
+// yaw offset): a combination not fixed over all three. The effects' part keeps that open
+// direction; one that is nearly all nuisance leaves the effects fixed.
+TEST(QuestionFitStages, TheEffectsPartKeepsWhatANuisanceLeavesOpen) {
+  FitOutcome joint;
+  joint.ok = true;
+  joint.values = {0.01, -0.02, 0.03};
+  joint.sigmas = {kInf, kInf, kInf};
+  joint.naive_sigmas = joint.sigmas;
+  joint.observable = {0, 0, 0};
+  joint.scales = {0.01, 0.01, 0.02};
+  joint.covariance.assign(9, 0.0);
+  joint.naive_covariance.assign(9, 0.0);
+  const double third = 1.0 / std::sqrt(3.0);
+  joint.unfixed = {{third, third, -third}, {0.05, 0.0, std::sqrt(1.0 - 0.05 * 0.05)}};
+  const FitOutcome part = effects_part(joint, 2);
+  ASSERT_EQ(part.unfixed.size(), 1U) << "the second is 0.25 % effect: a nuisance's own";
+  EXPECT_DOUBLE_EQ(part.unfixed[0][0], third);
+  EXPECT_DOUBLE_EQ(part.unfixed[0][1], third);
+  EXPECT_EQ(part.scales, (std::vector<double>{0.01, 0.01}));
+}
+
+// The effect's covariance from such a fit (full rank in the effects' block, as the nuisance's
+// part is cut off) loses the open sum: what the run fixes is the difference alone, and a
+// value off along the sum is not judged against a sigma the fit never had.
+TEST(QuestionVerdict, ACombinationLeftOpenIsNotCountedAsObservable) {
+  Candidate offsets = candidate("steering_offset");
+  offsets.keys = {"module_1_rad", "module_2_rad"};
+  offsets.params.push_back(offsets.params[0]);
+  offsets.identity = {0.0, 0.0};
+  offsets.inverse = {0, 0};
+  offsets.resolution = {0.0, 0.0};
+  offsets.relative_resolution = {0.0, 0.0};
+  Fitted final = fitted({&offsets}, -41.0, 7.5, 1.8);
+  final.fit.values = {0.01, -0.02};
+  final.fit.sigmas = {kInf, kInf};
+  // Variance 4e-6 along the sum (what the cut-off nuisance leaves), 1e-6 along the difference.
+  final.fit.covariance = {2.5e-6, 1.5e-6, 1.5e-6, 2.5e-6};
+  final.fit.scales = {0.01, 0.01};
+  const double half = std::sqrt(0.5);
+  final.fit.unfixed = {{half, half}};
+  const FittedEffect open = fitted_effect(final, score_of(final), 0, 0);
+  EXPECT_EQ(open.observable_combinations, 1U);
+  // What is left is the difference's variance, half of it on each offset.
+  EXPECT_NEAR(open.partial_sigmas[0], std::sqrt(0.5e-6), 1e-12);
+  std::size_t rank = 0;
+  EXPECT_NEAR(mahalanobis_squared({0.001, 0.001}, open.fit_covariance, rank), 0.0, 1e-9);
+  EXPECT_NEAR(mahalanobis_squared({0.001, -0.001}, open.fit_covariance, rank), 2.0, 1e-6);
+
+  final.fit.unfixed.clear();
+  const FittedEffect fixed = fitted_effect(final, score_of(final), 0, 0);
+  EXPECT_EQ(fixed.observable_combinations, 2U);
+  EXPECT_NEAR(mahalanobis_squared({0.001, 0.001}, fixed.fit_covariance, rank), 0.5, 1e-6);
+}
+
 // A second effect is looked for when another single is significant on its own, even with no
 // pattern left (a gyro bias and a wheel-radius difference both turn the heading).
 TEST(QuestionSelection, AnotherSignificantSingleCallsForAPair) {

@@ -73,6 +73,12 @@ struct FitOutcome {
   std::vector<double> naive_covariance;  ///< p x p row-major, observable subspace
   std::vector<double> covariance;        ///< p x p row-major, observable subspace only
   std::vector<char> observable;          ///< per parameter
+  /// The combinations the run does not fix (put back at their anchors), each a unit vector
+  /// over the parameters in the fit's scaled units (value / ParamSpec::scale); `scales`
+  /// turns them into the parameters' own units. A combination that mixes an effect with a
+  /// nuisance leaves the effect's part of it open too (effects_part()).
+  std::vector<std::vector<double>> unfixed;
+  std::vector<double> scales;  ///< per parameter, ParamSpec::scale
   /// Per parameter: the windows its sandwich variance rests on (sandwich_covariance()).
   std::vector<double> effective_windows;
   double rss = 0.0;
@@ -107,13 +113,16 @@ FitOutcome fit(const FitProblem& problem, const std::vector<ParamSpec>& specs,
 /// windows' scores as independent.
 /// `effective_windows` (when given): per coefficient, the number of windows its variance in
 /// effect rests on (Satterthwaite), the second degree of freedom of wald_f_z().
+/// `unfixed` (when given): the combinations the rows do not fix, unit vectors over the
+/// coefficients.
 std::vector<double> sandwich_covariance(const std::vector<double>& jacobian, std::size_t p,
                                         const std::vector<double>& r,
                                         const std::vector<std::size_t>& row_window,
                                         const std::vector<std::size_t>& row_group,
                                         std::size_t window_count, std::vector<char>& observable,
                                         bool scale_free = false, std::size_t score_lags = 0,
-                                        std::vector<double>* effective_windows = nullptr);
+                                        std::vector<double>* effective_windows = nullptr,
+                                        std::vector<std::vector<double>>* unfixed = nullptr);
 
 /// Newey and West's (1994) bandwidth for `windows` windows, 4 (T/100)^(2/9) lags rounded down:
 /// 3 for an 80 s run of 1 s windows.
