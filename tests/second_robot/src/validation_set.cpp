@@ -147,6 +147,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "third-validation") return &kThirdValidationSeeds;
   if (name == "fourth-validation") return &kFourthValidationSeeds;
   if (name == "fifth-validation") return &kFifthValidationSeeds;
+  if (name == "sixth-validation") return &kSixthValidationSeeds;
   return nullptr;
 }
 
@@ -157,7 +158,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "second-validation",
                                                  "third-validation",
                                                  "fourth-validation",
-                                                 "fifth-validation"};
+                                                 "fifth-validation",
+                                                 "sixth-validation"};
   return names;
 }
 
