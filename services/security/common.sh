@@ -75,7 +75,7 @@ service_group_usable() {
   local group
   group=$(service_group)
   [[ -n "$group" ]] && getent group "$group" >/dev/null || return 1
-  [[ $(id -u) -eq 0 ]] || id -nG | tr ' ' '\n' | grep -qx "$group"
+  [[ $(id -u) -eq 0 ]] || grep -qx "$group" <<<"$(id -nG | tr ' ' '\n')"
 }
 
 # shared PATH MODE: PATH group-owned by the service group with MODE (0750 or 0640) when the

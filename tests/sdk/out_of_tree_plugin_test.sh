@@ -23,7 +23,7 @@ for f in include/swivel/plugin/localization.hpp include/swivel/plugin/abi.hpp \
   [[ -f $prefix/$f ]] || fail "the SDK lacks $f"
 done
 # Nothing but the SDK: no daemon, no plugins, no configuration.
-if find "$work/stage" -name swiveld -o -name 'swivel_localization_*.so' | grep -q .; then
+if [[ -n $(find "$work/stage" -name swiveld -o -name 'swivel_localization_*.so') ]]; then
   fail "the dev component installs more than the SDK"
 fi
 echo "ok: SDK installed under $prefix"

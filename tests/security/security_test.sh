@@ -201,7 +201,9 @@ case_permissions_cover_every_bridge_topic() {
   local topic
   for topic in swivel_robot_state swivel_velocity_command rt/odom rt/robot1/cmd_vel rt/tf rt/imu \
     rt/robot1/imu rt/vrpn_mocap/docent/pose; do
-    printf '%s\n' "${topics[@]}" | grep -qx "$topic" ||
+    # A here-string, not a pipe: grep -q leaves at its first match, and under pipefail the
+    # printf it leaves writing to a closed pipe would fail the test now and then.
+    grep -qx "$topic" <<<"$(printf '%s\n' "${topics[@]}")" ||
       fail "the topics read from the code lack $topic: the extraction is broken"
   done
   echo "ok: ${#topics[@]} topic names read from the code: ${topics[*]}"
