@@ -186,10 +186,6 @@ std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& rep
   return sigma;
 }
 
-// A combination not fixed leaves the effects' part of it open when that part is more than
-// this share of it (of its squared length in scaled units), as fit() judges a parameter.
-constexpr double kUnfixedShare = 0.01;
-
 // BIC is counted on the effects' parameters alone, as the nominal model's has its nuisance
 // fitted too.
 FitOutcome effects_part(FitOutcome joint, std::size_t p) {

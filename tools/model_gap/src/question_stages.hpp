@@ -29,6 +29,9 @@ namespace swivel::model_gap::detail {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// A combination not fixed leaves an effect's part of it open when that part is more than
+/// this share of it (of its squared length in scaled units), as fit() judges a parameter.
+inline constexpr double kUnfixedShare = 0.01;
 /// Every window of the run (Evaluator::set_window_limit).
 inline constexpr std::size_t kAllWindows = static_cast<std::size_t>(-1);
 
@@ -123,7 +126,8 @@ std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
 /// without them (`rss_without`), as a normal deviate.
 double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
                const std::vector<double>& identity);
-/// The effects' part (the first p parameters) of a fit that had the nuisance free beside them.
+/// The effects' part (the first p parameters) of a fit that had the nuisance free beside them;
+/// of the combinations it left open, those more than kUnfixedShare in the effects.
 FitOutcome effects_part(FitOutcome joint, std::size_t p);
 std::size_t param_count(const std::vector<const Candidate*>& effects);
 CandidateScore score_of(const Fitted& f);

@@ -66,7 +66,9 @@ std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& optio
 }
 
 // The effect's parameters [first, first + m) of `fit`: its covariance (m x m) projected off
-// the combinations the run leaves open, which then count as not observable.
+// the combinations the run leaves open with more than kUnfixedShare in this effect (in a
+// pair, one nearly all the other effect leaves this one fixed), which then count as not
+// observable.
 void drop_open_combinations(const FitOutcome& fit, std::size_t first, std::size_t m,
                             std::vector<double>& covariance) {
   const auto mm = static_cast<Eigen::Index>(m);
@@ -74,10 +76,12 @@ void drop_open_combinations(const FitOutcome& fit, std::size_t first, std::size_
   for (const std::vector<double>& u : fit.unfixed) {
     if (u.size() < first + m || fit.scales.size() < first + m) continue;
     Eigen::VectorXd part(mm);
+    double share = 0.0;  // u has unit length in scaled units
     for (std::size_t k = 0; k < m; ++k) {
       part(static_cast<Eigen::Index>(k)) = u[first + k] * fit.scales[first + k];
+      share += u[first + k] * u[first + k];
     }
-    if (!(part.norm() > 0.0)) continue;
+    if (!(share > kUnfixedShare)) continue;
     open.conservativeResize(mm, open.cols() + 1);
     open.col(open.cols() - 1) = part;
   }

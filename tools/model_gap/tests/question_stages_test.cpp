@@ -266,6 +266,26 @@ TEST(QuestionVerdict, ACombinationLeftOpenIsNotCountedAsObservable) {
   EXPECT_NEAR(mahalanobis_squared({0.001, 0.001}, fixed.fit_covariance, rank), 0.5, 1e-6);
 }
 
+// In a pair, a combination left open that is nearly all the second effect (a trace, 0.25 %
+// of its squared length, in the first) leaves the first one fixed, and the second open.
+TEST(QuestionVerdict, AnOpenCombinationIsJudgedPerEffectOfAPair) {
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  Fitted final = fitted({&a, &b}, -41.0, 7.5, 1.8);
+  final.fit.covariance = {1e-4, 0.0, 0.0, 1e-4};
+  final.fit.scales = {1.0, 1.0};
+  final.fit.unfixed = {{0.05, std::sqrt(1.0 - 0.05 * 0.05)}};
+  const CandidateScore s = score_of(final);
+  const FittedEffect first = fitted_effect(final, s, 0, 0);
+  const FittedEffect second = fitted_effect(final, s, 1, 1);
+  EXPECT_EQ(first.observable_combinations, 1U);
+  EXPECT_NEAR(first.partial_sigmas[0], 0.01, 1e-12);
+  EXPECT_EQ(second.observable_combinations, 0U);
+  // 0.12 in the first effect (1.44 %, past the 1 % line): open in both.
+  final.fit.unfixed = {{0.12, std::sqrt(1.0 - 0.12 * 0.12)}};
+  EXPECT_EQ(fitted_effect(final, s, 0, 0).observable_combinations, 0U);
+}
+
 // A second effect is looked for when another single is significant on its own, even with no
 // pattern left (a gyro bias and a wheel-radius difference both turn the heading).
 TEST(QuestionSelection, AnotherSignificantSingleCallsForAPair) {
