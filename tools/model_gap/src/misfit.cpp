@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "swivel/model_gap/fit.hpp"
 
@@ -118,6 +119,20 @@ double median_abs(std::vector<double> v) {
   return *mid;
 }
 
+// A test's result without jump windows (every test's but the jumps').
+MisfitTest result(std::string test, const std::string& channel, std::string label, double z,
+                  double share, double size, std::size_t module) {
+  MisfitTest m;
+  m.test = std::move(test);
+  m.channel = channel;
+  m.label = std::move(label);
+  m.z = z;
+  m.share = share;
+  m.size = size;
+  m.module = module;
+  return m;
+}
+
 // Jumps: windows far outside the channel's robust spread (none when the channel has fewer
 // than 10 finite windows). A transient that the run and the replay place a little apart in
 // time moves residual from one window into the next: two neighbours, one of them far out,
@@ -127,6 +142,7 @@ void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
                 std::vector<MisfitTest>& out) {
   const std::size_t w = y.size();
   std::vector<double> finite;
+  std::vector<MisfitTest::Span> spans;  // per entry of `finite`
   const double far = kJumpZ * std::max(1.4826 * median_abs_finite(y), 1.0);
   for (std::size_t j = 0; j < w; ++j) {
     const double v = y[j];
@@ -135,10 +151,12 @@ void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
     const double larger = std::max(std::abs(v), std::abs(next));
     if (std::isfinite(next) && larger > far && std::abs(v + next) < 0.5 * larger) {
       finite.push_back((v + next) / std::sqrt(2.0));
+      spans.push_back({j, 2});
       ++j;
       continue;
     }
     finite.push_back(v);
+    spans.push_back({j, 1});
   }
   // A jump stands out of the channel's robust spread and of its modelled noise alike (a
   // channel quieter than its model, say quantized to whole counts, has a tiny spread).
@@ -146,18 +164,22 @@ void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
   if (!(spread > 0.0 && finite.size() >= 10)) return;
   std::vector<double> z;
   z.reserve(finite.size());
-  for (double v : finite) z.push_back(std::abs(v) / spread);
+  MisfitTest test = result("jumps", info.name, "", 0.0, 0.0, 0.0, info.module);
+  for (std::size_t k = 0; k < finite.size(); ++k) {
+    z.push_back(std::abs(finite[k]) / spread);
+    if (z.back() > kJumpZ) test.jumps.push_back(spans[k]);
+  }
   std::sort(z.begin(), z.end(), std::greater<>());
-  const auto count = static_cast<std::size_t>(
-      std::count_if(z.begin(), z.end(), [](double v) { return v > kJumpZ; }));
+  const std::size_t count = test.jumps.size();
   // The second largest decides (or the largest alone, against the higher bar); reported on
   // the scale of the other tests: 5 at the bar.
   const double second = z.size() > 1 ? z[1] : 0.0;
   const double strength = std::max(second / kJumpZ, z[0] / kLoneJumpZ);
-  out.push_back(
-      {"jumps", info.name,
-       count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "") : "no jumps",
-       5.0 * strength, 0.0, strength * kJumpZ, info.module});
+  test.label =
+      count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "") : "no jumps";
+  test.z = 5.0 * strength;
+  test.size = strength * kJumpZ;
+  out.push_back(std::move(test));
 }
 
 // The windows' indices, each its own window for the covariance, all in one group.
@@ -193,9 +215,8 @@ MisfitTest trend_test(const MisfitInputs& in, std::size_t c, const std::vector<d
     if (std::abs(trend.t[k]) > std::abs(trend.t[strongest])) strongest = k;
   }
   const ChannelInfo& info = in.channels[c];
-  return {"trend",    info.name,   trend.t.empty() ? "irregular" : kTrendLabels[strongest],
-          trend.z,    trend.share, trend.size,
-          info.module};
+  return result("trend", info.name, trend.t.empty() ? "irregular" : kTrendLabels[strongest],
+                trend.z, trend.share, trend.size, info.module);
 }
 
 // Repeats with a wheel's turn: for each wheel, the change of sin and cos of its angle.
@@ -210,9 +231,9 @@ void wheel_periodic_tests(const MisfitInputs& in, std::size_t c, const std::vect
       xw[j * 2 + 1] = in.wheel_cos_change[i][j] / s;
     }
     const Regression periodic = regress(y, xw, 2, rows.window, rows.one_group, w);
-    out.push_back({"wheel_periodic", in.channels[c].name,
-                   "repeats with wheel " + std::to_string(i + 1) + "'s turn", periodic.z,
-                   periodic.share, periodic.size, i});
+    out.push_back(result("wheel_periodic", in.channels[c].name,
+                         "repeats with wheel " + std::to_string(i + 1) + "'s turn", periodic.z,
+                         periodic.share, periodic.size, i));
   }
 }
 
@@ -251,8 +272,8 @@ void world_drift_test(const MisfitInputs& in, std::vector<MisfitTest>& out) {
     rows_axis[2 * j + 1] = 1;
   }
   const Regression drift = regress(y, x, 2, rows_window, rows_axis, w);
-  out.push_back({"world_drift", in.channels[cx].name, "drifts in a fixed world direction", drift.z,
-                 drift.share, drift.size, 0});
+  out.push_back(result("world_drift", in.channels[cx].name, "drifts in a fixed world direction",
+                       drift.z, drift.share, drift.size, 0));
 }
 
 }  // namespace

@@ -345,6 +345,27 @@ void refit_selection(QuestionState& s, const QuestionOptions& options) {
   s.final.bic_reference = s.nominal_fixed.bic;
 }
 
+void mark_remnant_jumps(const QuestionReplay& replay, const std::vector<double>& before,
+                        const std::vector<double>& after, std::vector<MisfitTest>& misfits) {
+  const std::size_t w = replay.windows;
+  for (MisfitTest& m : misfits) {
+    if (m.test != "jumps" || m.jumps.empty()) continue;
+    const auto channel = std::find_if(replay.channels.begin(), replay.channels.end(),
+                                      [&](const ChannelInfo& c) { return c.name == m.channel; });
+    if (channel == replay.channels.end()) continue;
+    const auto c = static_cast<std::size_t>(channel - replay.channels.begin());
+    m.remnant = std::all_of(m.jumps.begin(), m.jumps.end(), [&](const MisfitTest::Span& span) {
+      double left = 0.0;
+      double was = 0.0;
+      for (std::size_t j = span.first; j < span.first + span.count && j < w; ++j) {
+        left += after[c * w + j];
+        was += before[c * w + j];
+      }
+      return std::abs(left) <= kRemnantShare * std::abs(was - left);
+    });
+  }
+}
+
 void measure_misfit(const QuestionState& s, QuestionResult& result) {
   const FitOutcome& refit = s.final.fit;
   const auto effect_params = static_cast<std::ptrdiff_t>(param_count(s.final.effects));
@@ -357,6 +378,8 @@ void measure_misfit(const QuestionState& s, QuestionResult& result) {
   s.eval.evaluate(s.final.effects, refit.values, true, result.residuals_after, false);
   result.misfits = misfit_tests(
       misfit_inputs(s.replay, result.residuals_after, s.eval.sigma(), result.residuals_before));
+  if (!s.final.effects.empty())
+    mark_remnant_jumps(s.replay, result.residuals_before, result.residuals_after, result.misfits);
   result.channels =
       channel_gaps(s.replay, s.eval.sigma(), result.residuals_before, result.residuals_after);
   for (std::size_t c = 0; c < result.channels.size(); ++c) {
@@ -364,6 +387,41 @@ void measure_misfit(const QuestionState& s, QuestionResult& result) {
     if (c < s.replay.stated_variance.size() && s.replay.stated_variance[c] > 0.0)
       result.channels[c].stated_sigma = std::sqrt(s.replay.stated_variance[c]);
   }
+}
+
+void attribute_gap(QuestionState& s, const QuestionOptions& options, QuestionResult& result) {
+  if (s.chosen != nullptr) return;
+  const MisfitTest* gap = counting_misfit(result.misfits, options);
+  if (gap == nullptr) return;
+  const Fitted* best = choose_attribution(s.singles, s.full, s.nominal_fixed.bic, options);
+  if (best == nullptr) return;
+  const MisfitTest detected = *gap;
+  // What refit_selection changes, to put back if the candidate leaves a gap.
+  const NoiseModel noise = s.noise;
+  const std::vector<double> sigma = s.eval.sigma();
+  const std::vector<double> nuisance = s.eval.nuisance();
+  const std::vector<double> known_variance = s.replay.known_variance;
+  Fitted nominal = s.final;
+  s.chosen = best;
+  refit_selection(s, options);
+  QuestionResult with;
+  with.residuals_before = result.residuals_before;
+  measure_misfit(s, with);
+  if (s.final.fit.ok && counting_misfit(with.misfits, options) == nullptr) {
+    result.nuisance = std::move(with.nuisance);
+    result.nuisance_sigmas = std::move(with.nuisance_sigmas);
+    result.residuals_after = std::move(with.residuals_after);
+    result.misfits = std::move(with.misfits);
+    result.channels = std::move(with.channels);
+    result.attributed_gap = {detected};
+    return;
+  }
+  s.chosen = nullptr;
+  s.noise = noise;
+  s.eval.set_sigma(sigma);
+  s.eval.set_nuisance(nuisance);
+  s.replay.known_variance = known_variance;
+  s.final = std::move(nominal);
 }
 
 std::vector<NoiseFinding> stated_noise_findings(const QuestionReplay& replay,
@@ -400,6 +458,7 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   result.residuals_before = s.residuals_before;
   result.candidates = detail::candidate_scores(s);
   detail::measure_misfit(s, result);
+  detail::attribute_gap(s, options, result);
   result.noise_findings = detail::stated_noise_findings(s.replay, s.noise, options.min_noise_ratio);
   const detail::VerdictInputs verdict{question, &base,   &s.singles,         s.chosen,
                                       &s.final, &s.full, s.nominal_fixed.bic};

@@ -6,6 +6,8 @@
 //   select       the best significant single effect, then a second one if it earns its place;
 //   refit        the selection again with the noise it leaves and its nuisance free;
 //   misfit       what remains, and the tests for what the library does not hold;
+//   attribute    a gap those tests detect with nothing selected, put down to the best
+//                candidate when that takes it away;
 //   noise        the noise the fit took against what the model's sensor figures state;
 //   verdict      no significant gap, named, or unexplained residual, and its summary;
 //   calibrate    with nothing named, the robot model's own parameters the run fixes.
@@ -162,6 +164,12 @@ Shortfall shortfall(const Fitted& f, const QuestionOptions& options);
 /// significant and better than the nominal model (`nominal_bic`); none: nullptr.
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
                             double nominal_bic, const QuestionOptions& options);
+/// The candidate to put a detected gap down to (QuestionOptions::min_z_attribute): the best
+/// (by BIC) of the singles fitted on every window and better than the nominal model, when it
+/// is significant at min_z_attribute, large enough to matter and resolved at that level;
+/// none (nullptr) when the best one is not, whatever the others.
+const Fitted* choose_attribution(const std::vector<Fitted>& singles, const std::vector<char>& full,
+                                 double nominal_bic, const QuestionOptions& options);
 /// Whether the chosen effect leaves a pattern a second effect could take.
 bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options);
 /// Whether a single candidate other than `chosen` is significant on its own: evidence of a
@@ -220,6 +228,19 @@ void select_effects(QuestionState& s, const std::vector<Candidate>& library,
                     const QuestionOptions& options);
 void refit_selection(QuestionState& s, const QuestionOptions& options);
 void measure_misfit(const QuestionState& s, QuestionResult& result);
+/// A jump left in a window where a selected effect changed the prediction by more than
+/// 1 / kRemnantShare times what is left there is what that effect's approximate form leaves
+/// of the change it brings (a lag fitted as first order where a servo has inertia), not
+/// another effect.
+inline constexpr double kRemnantShare = 0.5;
+/// Marks the jumps tests (MisfitTest::remnant) every jump of which is such a remnant, from the
+/// residual before (the nominal model's) and after (the selection's), channel-major.
+void mark_remnant_jumps(const QuestionReplay& replay, const std::vector<double>& before,
+                        const std::vector<double>& after, std::vector<MisfitTest>& misfits);
+/// With nothing selected and a misfit test that counts: the candidate choose_attribution()
+/// gives, refitted as the selection; kept (s.chosen set, result's misfit measures and
+/// attributed_gap replaced) when no misfit test counts with it, else the state is restored.
+void attribute_gap(QuestionState& s, const QuestionOptions& options, QuestionResult& result);
 
 /// The channels whose fitted noise at rest (`noise`) is at least `min_ratio` times (in sigma)
 /// the replay's stated variance, largest ratio first.

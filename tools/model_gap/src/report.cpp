@@ -66,15 +66,21 @@ json question_json(const QuestionResult& q) {
                      {"iterations", c.iterations}});
   }
   j["candidates"] = cands;
-  json misfits = json::array();
-  for (const auto& m : q.misfits) {
-    misfits.push_back({{"test", m.test},
-                       {"channel", m.channel},
-                       {"label", m.label},
-                       {"z", number(m.z)},
-                       {"share", number(m.share)}});
-  }
-  j["misfit_tests"] = misfits;
+  const auto misfits_json = [](const std::vector<MisfitTest>& tests) {
+    json out = json::array();
+    for (const auto& m : tests) {
+      out.push_back({{"test", m.test},
+                     {"channel", m.channel},
+                     {"label", m.label},
+                     {"z", number(m.z)},
+                     {"share", number(m.share)},
+                     {"remnant", m.remnant}});
+    }
+    return out;
+  };
+  j["misfit_tests"] = misfits_json(q.misfits);
+  // Named by attribution: the test that found the gap the named effects take away.
+  j["attributed_gap"] = misfits_json(q.attributed_gap);
   json chans = json::array();
   for (const auto& c : q.channels) {
     chans.push_back(

@@ -11,8 +11,8 @@ namespace swivel::model_gap::detail {
 namespace {
 
 // Whether effect e of a fit is further from the model's own values than the replay can
-// resolve (a lag, a limit).
-bool resolved(const Fitted& f, std::size_t e, const QuestionOptions& options) {
+// resolve (a lag, a limit), at significance `min_z`.
+bool resolved(const Fitted& f, std::size_t e, double min_z) {
   std::size_t first = 0;
   for (std::size_t k = 0; k < e; ++k) first += f.effects[k]->params.size();
   const Candidate& c = *f.effects[e];
@@ -27,7 +27,19 @@ bool resolved(const Fitted& f, std::size_t e, const QuestionOptions& options) {
     chi2 += std::pow((value - c.identity[i]) / sigma, 2);
     count += 1.0;
   }
-  return count == 0.0 || chi_square_z(chi2, count) >= options.min_z_name;
+  return count == 0.0 || chi_square_z(chi2, count) >= min_z;
+}
+
+// Fully fitted singles better than the nominal model, best (by BIC) first.
+std::vector<std::size_t> by_bic(const std::vector<Fitted>& singles, const std::vector<char>& full,
+                                double nominal_bic) {
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < singles.size(); ++k) {
+    if (full[k] != 0 && singles[k].fit.ok && singles[k].fit.bic < nominal_bic) order.push_back(k);
+  }
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return singles[a].fit.bic < singles[b].fit.bic; });
+  return order;
 }
 
 }  // namespace
@@ -37,7 +49,7 @@ Shortfall shortfall(const Fitted& f, const QuestionOptions& options) {
   for (std::size_t e = 0; e < f.z.size(); ++e) {
     if (f.z[e] < options.min_z_name) return {Shortfall::Kind::kBelowSignificance, e};
     if (f.size[e] < options.min_effect_size) return {Shortfall::Kind::kTooSmall, e};
-    if (!resolved(f, e, options)) return {Shortfall::Kind::kUnresolved, e};
+    if (!resolved(f, e, options.min_z_name)) return {Shortfall::Kind::kUnresolved, e};
   }
   return {};
 }
@@ -48,16 +60,21 @@ bool significant(const Fitted& f, const QuestionOptions& options) {
 
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
                             double nominal_bic, const QuestionOptions& options) {
-  std::vector<std::size_t> order(singles.size());
-  std::iota(order.begin(), order.end(), 0U);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return bic_or_last(singles[a], full[a] != 0) < bic_or_last(singles[b], full[b] != 0);
-  });
-  for (std::size_t k : order) {
-    if (full[k] != 0 && significant(singles[k], options) && singles[k].fit.bic < nominal_bic)
-      return &singles[k];
+  for (std::size_t k : by_bic(singles, full, nominal_bic)) {
+    if (significant(singles[k], options)) return &singles[k];
   }
   return nullptr;
+}
+
+const Fitted* choose_attribution(const std::vector<Fitted>& singles, const std::vector<char>& full,
+                                 double nominal_bic, const QuestionOptions& options) {
+  const std::vector<std::size_t> order = by_bic(singles, full, nominal_bic);
+  if (order.empty()) return nullptr;
+  const Fitted& best = singles[order.front()];
+  const bool attributable = best.z.size() == 1 && best.z[0] >= options.min_z_attribute &&
+                            best.size[0] >= options.min_effect_size &&
+                            resolved(best, 0, options.min_z_attribute);
+  return attributable ? &best : nullptr;
 }
 
 bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The question's verdict (question_stages.hpp): unexplained residual when a misfit test
-// fires, no significant gap when nothing was selected, else the selection named.
+// fires, no significant gap when nothing was selected, else the selection named (on its own
+// significance, or as what takes away a gap the misfit tests detected).
 #include <Eigen/Core>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -143,7 +144,8 @@ FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::si
 
 namespace {
 
-void name_selection(const VerdictInputs& in, const std::string& title, QuestionResult& result) {
+void name_selection(const VerdictInputs& in, const QuestionOptions& options,
+                    const std::string& title, QuestionResult& result) {
   const Fitted& final = *in.final;
   const CandidateScore s = score_of(final);
   std::size_t first = 0;
@@ -156,9 +158,25 @@ void name_selection(const VerdictInputs& in, const std::string& title, QuestionR
   for (const FittedEffect& fe : result.named) zs += (zs.empty() ? "" : ", ") + fmt(fe.z, 3);
   std::string sizes;
   for (double v : s.size) sizes += (sizes.empty() ? "" : ", ") + fmt(v, 3);
-  result.summary = "Named " + s.label() + " (" + title + "): significant at " + zs +
-                   " sigma, an RMS change of " + sizes +
-                   " noise sigmas; what remains shows no pattern.";
+  std::string why = "significant at " + zs + " sigma";
+  if (!result.attributed_gap.empty()) {
+    const MisfitTest& m = result.attributed_gap.front();
+    why = "the gap the misfit tests found without it (" + m.channel + " " + m.label + ", " +
+          fmt(m.z, 3) + " sigma) is gone with it, the best candidate at " + zs + " sigma";
+  }
+  result.summary = "Named " + s.label() + " (" + title + "): " + why + ", an RMS change of " +
+                   sizes + " noise sigmas; what remains shows no pattern";
+  const auto remnant =
+      std::find_if(result.misfits.begin(), result.misfits.end(), [&](const MisfitTest& m) {
+        return m.remnant && m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
+      });
+  if (remnant != result.misfits.end()) {
+    result.summary += " but where it acts: " + remnant->channel + " keeps " + remnant->label +
+                      " (" + fmt(remnant->size, 2) +
+                      " noise sigmas), each less than half the change it brings there (its form "
+                      "is approximate)";
+  }
+  result.summary += ".";
 }
 
 }  // namespace
@@ -166,7 +184,7 @@ void name_selection(const VerdictInputs& in, const std::string& title, QuestionR
 const MisfitTest* counting_misfit(const std::vector<MisfitTest>& misfits,
                                   const QuestionOptions& options) {
   const auto counts = [&](const MisfitTest& m) {
-    return m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
+    return !m.remnant && m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
   };
   const auto first = std::find_if(misfits.begin(), misfits.end(), counts);
   return first != misfits.end() ? &*first : nullptr;
@@ -182,7 +200,7 @@ void give_verdict(const VerdictInputs& in, const QuestionOptions& options, Quest
     result.summary = no_gap_summary(in, options, title);
   } else {
     result.verdict = Verdict::kNamed;
-    name_selection(in, title, result);
+    name_selection(in, options, title, result);
   }
 }
 

@@ -117,6 +117,32 @@ TEST(Misfit, ATransientSplitAcrossTwoWindowsIsNotAJump) {
   EXPECT_GT(z_of(misfit_tests(same_sign), "jumps", "dx"), 5.0);
 }
 
+// The jumps test lists its jumps' windows (a pair that cancels as one span of two), for the
+// question to compare them with the residual before.
+TEST(Misfit, JumpsNameTheirWindows) {
+  MisfitInputs in = noise_only(11);
+  in.residuals[0 * kWindows + 20] += 14.0;
+  in.residuals[0 * kWindows + 60] += 30.0;
+  in.residuals[0 * kWindows + 61] -= 24.0;
+  for (const MisfitTest& t : misfit_tests(in)) {
+    if (t.test != "jumps") continue;
+    if (t.channel != "dx") {
+      EXPECT_TRUE(t.jumps.empty()) << t.channel;
+      continue;
+    }
+    ASSERT_EQ(t.jumps.size(), 1U) << "the cancelling pair is not a jump";
+    EXPECT_EQ(t.jumps[0].first, 20U);
+    EXPECT_EQ(t.jumps[0].count, 1U);
+  }
+  in.residuals[0 * kWindows + 61] += 24.0 + 30.0;  // the pair now adds up
+  for (const MisfitTest& t : misfit_tests(in)) {
+    if (t.test != "jumps" || t.channel != "dx") continue;
+    ASSERT_EQ(t.jumps.size(), 3U);
+    EXPECT_EQ(t.jumps[1].first, 60U);
+    EXPECT_EQ(t.jumps[2].first, 61U);
+  }
+}
+
 // A short run (30 windows, as a recording of half a minute gives) has few windows to
 // estimate each pattern's uncertainty from, fewer still for a regressor that lives in a few
 // windows (acceleration at the command steps). Its tests must still exceed 3 sigma on noise

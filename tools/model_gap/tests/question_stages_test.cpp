@@ -211,6 +211,87 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
       << result.summary;
 }
 
+// A gap the misfit tests detected is put down to the best candidate by BIC alone: at
+// min_z_attribute, large enough and resolved; never to a worse one when the best falls short.
+TEST(QuestionSelection, AGapIsPutDownToTheBestCandidateOnly) {
+  const QuestionOptions options;
+  const Candidate a = candidate("a");
+  const Candidate b = candidate("b");
+  const Candidate blurred = candidate("blurred", 0.5);  // resolves 1.0 at 2 sigma: too little
+  std::vector<Fitted> singles = {fitted({&a}, -30.0, 8.0, 2.0), fitted({&b}, -60.0, 4.2, 2.0)};
+  const std::vector<char> full = {1, 1};
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), &singles[1]);
+  singles[1].z[0] = 2.9;  // the best below min_z_attribute: not the significant one either
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), nullptr);
+  singles[1].z[0] = 4.2;
+  singles[1].size[0] = 0.3;  // too small to matter
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), nullptr);
+  singles[1].size[0] = 2.0;
+  EXPECT_EQ(choose_attribution(singles, {1, 0}, 0.0, options), singles.data()) << "screened only";
+  EXPECT_EQ(choose_attribution(singles, full, -100.0, options), nullptr) << "none beats nominal";
+  const std::vector<Fitted> unresolved = {fitted({&blurred}, -60.0, 4.2, 2.0)};
+  EXPECT_EQ(choose_attribution(unresolved, {1}, 0.0, options), nullptr);
+  QuestionOptions strict = options;
+  strict.min_z_attribute = 5.0;
+  EXPECT_EQ(choose_attribution({fitted({&b}, -60.0, 4.2, 2.0)}, {1}, 0.0, strict), nullptr);
+}
+
+TEST(QuestionVerdict, AnAttributedGapIsNamedWithTheTestThatFoundIt) {
+  const QuestionOptions options;
+  const Candidate lag = candidate("steering_lag");
+  const std::vector<Fitted> singles = {fitted({&lag}, -1000.0, 4.96, 6.2)};
+  const Fitted final = fitted({&lag}, -1001.0, 4.96, 6.2);
+  const RobotModel base;
+  QuestionResult result;
+  result.misfits = {misfit("speed", 1.0, 0.2)};
+  result.attributed_gap = {misfit("jumps", 11.0, 4.0)};
+  give_verdict({Question::kCommandToMotion, &base, &singles, singles.data(), &final}, options,
+               result);
+  ASSERT_EQ(result.verdict, Verdict::kNamed);
+  ASSERT_EQ(result.named.size(), 1U);
+  EXPECT_NE(result.summary.find("the gap the misfit tests found without it (dx jumps pattern, 11 "
+                                "sigma) is gone with it, the best candidate at 4.96 sigma"),
+            std::string::npos)
+      << result.summary;
+}
+
+// Jumps that a selected effect leaves of a change at least twice their size where it acts are
+// its approximate form: they do not make the residual unexplained. One the effect did not
+// bring down (or made) still does.
+TEST(QuestionVerdict, JumpsLeftOfALargerChangeAreTheEffectsForm) {
+  QuestionReplay replay;
+  replay.windows = 4;
+  ChannelInfo dx;
+  dx.name = "dx";
+  ChannelInfo dy;
+  dy.name = "dy";
+  replay.channels = {dx, dy};
+  // dx: window 1 went from 30 to 8 (a change of -22: 8 is within half of it); window 2+3, a
+  // span, from 12 + 12 to 3 + 2. dy: window 0 from 2 to -8 (the effect made it).
+  const std::vector<double> before = {0.0, 30.0, 12.0, 12.0, 2.0, 0.0, 0.0, 0.0};
+  const std::vector<double> after = {0.0, 8.0, 3.0, 2.0, -8.0, 0.0, 0.0, 0.0};
+  MisfitTest x = misfit("jumps", 9.0, 12.0);
+  x.channel = "dx";
+  x.jumps = {{1, 1}, {2, 2}};
+  MisfitTest y = misfit("jumps", 7.0, 10.0);
+  y.channel = "dy";
+  y.jumps = {{0, 1}};
+  std::vector<MisfitTest> misfits = {x, y, misfit("trend", 6.0, 2.0)};
+  mark_remnant_jumps(replay, before, after, misfits);
+  EXPECT_TRUE(misfits[0].remnant);
+  EXPECT_FALSE(misfits[1].remnant);
+  EXPECT_FALSE(misfits[2].remnant);
+  const QuestionOptions options;
+  EXPECT_EQ(counting_misfit(misfits, options), &misfits[1]);
+  // Window 1 left at 12 of a change of 18: more than half of it, not a remnant.
+  std::vector<double> worse = after;
+  worse[1] = 12.0;
+  std::vector<MisfitTest> again = {x};
+  mark_remnant_jumps(replay, before, worse, again);
+  EXPECT_FALSE(again[0].remnant);
+  EXPECT_EQ(counting_misfit(again, options), again.data());
+}
+
 // Two steering offsets whose sum the run leaves open beside a nuisance (the motion capture's
 // yaw offset): a combination not fixed over all three. The effects' part keeps that open
 // direction; one that is nearly all nuisance leaves the effects fixed.

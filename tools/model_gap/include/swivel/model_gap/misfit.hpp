@@ -27,6 +27,17 @@ struct MisfitTest {
   /// over the channel's robust spread)
   double size = 0.0;
   std::size_t module = 0;
+  /// jumps: the windows of each jump past the bar, [first, first + count) (count 2: a
+  /// transient the run and the replay place in neighbouring windows).
+  struct Span {
+    std::size_t first = 0;
+    std::size_t count = 1;
+  };
+  std::vector<Span> jumps;
+  /// jumps: every one is what a selected effect left of a larger change it brought there
+  /// (set by the question, which knows the residual before): the effect's form is approximate
+  /// where it acts, not something else missing.
+  bool remnant = false;
 };
 
 /// What every channel's residual looks like in a window, for the regressions.

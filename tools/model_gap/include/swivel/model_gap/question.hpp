@@ -10,6 +10,9 @@
 //   unexplained residual  a misfit test fires: something the library does not hold
 //                         remains, and nothing is named (a library effect that fits part
 //                         of it would be a wrong name).
+// A gap the misfit tests detect with no candidate significant enough to name unasked is put
+// down to the best candidate when that takes the whole gap away (QuestionOptions::
+// min_z_attribute): the detection is the misfit test's, the candidate only says which.
 // Significance is a likelihood-ratio test of each effect against the fit without it,
 // widened by how much the residuals' autocorrelation widens its parameters (the sandwich
 // covariance of fit.hpp), expressed as a normal deviate.
@@ -37,6 +40,13 @@ struct QuestionOptions {
   double min_z_name = 5.0;  ///< significance an effect needs to be named
   double min_z_misfit =
       5.0;  ///< significance at which a misfit test calls the residual unexplained
+  /// Significance at which the best candidate (by BIC) names a gap a misfit test detected on
+  /// the nominal residual, when nothing reached min_z_name and, with it, no misfit test counts.
+  /// An effect that acts at a handful of steps (a steering lag while casters swing) rests on
+  /// those few windows, and its F test with their few degrees of freedom stays below
+  /// min_z_name however large the change it explains; the gap it takes away is already
+  /// significant at min_z_misfit.
+  double min_z_attribute = 3.0;
   /// Noise at rest this many times (in sigma) what the model's sensor figures give, or more, is
   /// reported as a NoiseFinding.
   double min_noise_ratio = 2.0;
@@ -180,6 +190,9 @@ struct QuestionResult {
   std::vector<double> residuals_before;      ///< channel-major, channel units
   std::vector<double> residuals_after;
   RobotModel augmented;  ///< base plus the named (or calibrated) effects
+  /// Named by attribution (QuestionOptions::min_z_attribute): the misfit test that detected
+  /// the gap on the nominal residual, which the named effects take away. Empty otherwise.
+  std::vector<MisfitTest> attributed_gap;
   double wall_time_s = 0.0;
 };
 
