@@ -148,6 +148,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "fourth-validation") return &kFourthValidationSeeds;
   if (name == "fifth-validation") return &kFifthValidationSeeds;
   if (name == "sixth-validation") return &kSixthValidationSeeds;
+  if (name == "seventh-validation") return &kSeventhValidationSeeds;
   return nullptr;
 }
 
@@ -159,7 +160,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "third-validation",
                                                  "fourth-validation",
                                                  "fifth-validation",
-                                                 "sixth-validation"};
+                                                 "sixth-validation",
+                                                 "seventh-validation"};
   return names;
 }
 

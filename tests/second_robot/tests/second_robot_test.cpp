@@ -354,7 +354,8 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   // The smoke set and the earlier validation sets (development data now) are other ranges.
   for (const SeedRanges& other :
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
-        kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds}) {
+        kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
+        kSeventhValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -380,7 +381,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("fourth-validation"), &kFourthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("fifth-validation"), &kFifthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("sixth-validation"), &kSixthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("seventh-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("seventh-validation"), &kSeventhValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("eighth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 

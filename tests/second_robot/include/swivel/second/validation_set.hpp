@@ -38,9 +38,9 @@ struct SeedRanges {
   std::uint64_t outside = 0;
 };
 
-// The validation set: seeds drawn at random on 2026-11-28 (the sixth draw) and never used
+// The validation set: seeds drawn at random on 2026-11-28 (the seventh draw) and never used
 // while developing.
-inline constexpr SeedRanges kValidationSeeds{96537188, 69718967, 14479882};
+inline constexpr SeedRanges kValidationSeeds{50642445, 11965200, 28125553};
 // The first validation set (2026-11-26). It was measured again after each of several changes
 // of the workflow on 2026-11-27, so it is development data now: reported, never judged.
 inline constexpr SeedRanges kFirstValidationSeeds{7340001, 7350001, 7360001};
@@ -61,6 +61,10 @@ inline constexpr SeedRanges kFifthValidationSeeds{98462895, 59651338, 63658172};
 // fix of that rule found on a padded run (the same figures); seeds were drawn again for the
 // next change (combinations a nuisance leaves open).
 inline constexpr SeedRanges kSixthValidationSeeds{76076734, 16041776, 65394149};
+// The seventh (drawn on 2026-11-28): measured once after combinations a nuisance leaves open;
+// seeds were drawn again for the next change (a detected gap put down to the candidate that
+// takes it away, and jumps left where a named effect acts).
+inline constexpr SeedRanges kSeventhValidationSeeds{96537188, 69718967, 14479882};
 // Smoke seeds (tests, --quick): a range of their own, so that looking at them reveals nothing
 // of the validation runs.
 inline constexpr SeedRanges kSmokeSeeds{5001, 6001, 6501};
@@ -75,7 +79,7 @@ inline constexpr double kValidationDurationS = 80.0;
 /// another name.
 const SeedRanges* seed_ranges_named(std::string_view name);
 /// Those names: `smoke`, `validation`, then the earlier validation sets (development data
-/// now), `first-validation` to `sixth-validation`.
+/// now), `first-validation` to `seventh-validation`.
 const std::vector<std::string>& seed_set_names();
 
 /// One case of each kind, from its seed (and its index within the range, which spreads the
