@@ -393,7 +393,7 @@ void attribute_gap(QuestionState& s, const QuestionOptions& options, QuestionRes
   if (s.chosen != nullptr) return;
   const MisfitTest* gap = counting_misfit(result.misfits, options);
   if (gap == nullptr) return;
-  const Fitted* best = choose_attribution(s.singles, s.full, s.nominal_fixed.bic, options);
+  const Fitted* best = choose_attribution(s.singles, s.full, s.nominal_fixed.bic, *gap, options);
   if (best == nullptr) return;
   const MisfitTest detected = *gap;
   // What refit_selection changes, to put back if the candidate leaves a gap.

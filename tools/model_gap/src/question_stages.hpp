@@ -164,12 +164,14 @@ Shortfall shortfall(const Fitted& f, const QuestionOptions& options);
 /// significant and better than the nominal model (`nominal_bic`); none: nullptr.
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
                             double nominal_bic, const QuestionOptions& options);
-/// The candidate to put a detected gap down to (QuestionOptions::min_z_attribute): the best
-/// (by BIC) of the singles fitted on every window and better than the nominal model, when it
-/// is significant at min_z_attribute, large enough to matter and resolved at that level;
+/// The candidate to put a detected gap (the misfit test `gap`) down to (QuestionOptions::
+/// min_z_attribute): the best (by BIC) of the singles fitted on every window and better than
+/// the nominal model, when it is significant at min_z_attribute, large enough to matter,
+/// resolved at that level and, for a gap of jumps, has fewer parameters than there are jumps;
 /// none (nullptr) when the best one is not, whatever the others.
 const Fitted* choose_attribution(const std::vector<Fitted>& singles, const std::vector<char>& full,
-                                 double nominal_bic, const QuestionOptions& options);
+                                 double nominal_bic, const MisfitTest& gap,
+                                 const QuestionOptions& options);
 /// Whether the chosen effect leaves a pattern a second effect could take.
 bool pattern_left(const std::vector<MisfitTest>& left, const QuestionOptions& options);
 /// Whether a single candidate other than `chosen` is significant on its own: evidence of a

@@ -67,13 +67,17 @@ const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vecto
 }
 
 const Fitted* choose_attribution(const std::vector<Fitted>& singles, const std::vector<char>& full,
-                                 double nominal_bic, const QuestionOptions& options) {
+                                 double nominal_bic, const MisfitTest& gap,
+                                 const QuestionOptions& options) {
   const std::vector<std::size_t> order = by_bic(singles, full, nominal_bic);
   if (order.empty()) return nullptr;
   const Fitted& best = singles[order.front()];
+  // k parameters can take away k isolated jumps whatever made them (one steering offset per
+  // caster, one slip event per window): only fewer parameters than jumps say which effect.
+  const bool fewer_than_jumps = gap.test != "jumps" || param_count(best.effects) < gap.jumps.size();
   const bool attributable = best.z.size() == 1 && best.z[0] >= options.min_z_attribute &&
                             best.size[0] >= options.min_effect_size &&
-                            resolved(best, 0, options.min_z_attribute);
+                            resolved(best, 0, options.min_z_attribute) && fewer_than_jumps;
   return attributable ? &best : nullptr;
 }
 

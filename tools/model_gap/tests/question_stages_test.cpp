@@ -212,7 +212,8 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
 }
 
 // A gap the misfit tests detected is put down to the best candidate by BIC alone: at
-// min_z_attribute, large enough and resolved; never to a worse one when the best falls short.
+// min_z_attribute, large enough, resolved, and with fewer parameters than the jumps it takes
+// away; never to a worse one when the best falls short.
 TEST(QuestionSelection, AGapIsPutDownToTheBestCandidateOnly) {
   const QuestionOptions options;
   const Candidate a = candidate("a");
@@ -220,20 +221,40 @@ TEST(QuestionSelection, AGapIsPutDownToTheBestCandidateOnly) {
   const Candidate blurred = candidate("blurred", 0.5);  // resolves 1.0 at 2 sigma: too little
   std::vector<Fitted> singles = {fitted({&a}, -30.0, 8.0, 2.0), fitted({&b}, -60.0, 4.2, 2.0)};
   const std::vector<char> full = {1, 1};
-  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), &singles[1]);
+  const MisfitTest gap = misfit("trend", 9.0, 2.0);
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, gap, options), &singles[1]);
   singles[1].z[0] = 2.9;  // the best below min_z_attribute: not the significant one either
-  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), nullptr);
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, gap, options), nullptr);
   singles[1].z[0] = 4.2;
   singles[1].size[0] = 0.3;  // too small to matter
-  EXPECT_EQ(choose_attribution(singles, full, 0.0, options), nullptr);
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, gap, options), nullptr);
   singles[1].size[0] = 2.0;
-  EXPECT_EQ(choose_attribution(singles, {1, 0}, 0.0, options), singles.data()) << "screened only";
-  EXPECT_EQ(choose_attribution(singles, full, -100.0, options), nullptr) << "none beats nominal";
+  EXPECT_EQ(choose_attribution(singles, {1, 0}, 0.0, gap, options), singles.data())
+      << "screened only";
+  EXPECT_EQ(choose_attribution(singles, full, -100.0, gap, options), nullptr)
+      << "none beats nominal";
   const std::vector<Fitted> unresolved = {fitted({&blurred}, -60.0, 4.2, 2.0)};
-  EXPECT_EQ(choose_attribution(unresolved, {1}, 0.0, options), nullptr);
+  EXPECT_EQ(choose_attribution(unresolved, {1}, 0.0, gap, options), nullptr);
   QuestionOptions strict = options;
   strict.min_z_attribute = 5.0;
-  EXPECT_EQ(choose_attribution({fitted({&b}, -60.0, 4.2, 2.0)}, {1}, 0.0, strict), nullptr);
+  EXPECT_EQ(choose_attribution({fitted({&b}, -60.0, 4.2, 2.0)}, {1}, 0.0, gap, strict), nullptr);
+  // A gap of jumps: only a candidate with fewer parameters than jumps names it.
+  MisfitTest jumps = misfit("jumps", 12.0, 20.0);
+  jumps.jumps = {{3, 1}, {9, 1}};
+  EXPECT_EQ(choose_attribution(singles, full, 0.0, jumps, options), &singles[1]);
+  Candidate offsets = candidate("steering_offset");
+  offsets.params.push_back(offsets.params[0]);
+  offsets.keys = {"module_1_rad", "module_2_rad"};
+  offsets.identity = {0.0, 0.0};
+  offsets.inverse = {0, 0};
+  offsets.resolution = {0.0, 0.0};
+  offsets.relative_resolution = {0.0, 0.0};
+  std::vector<Fitted> two = {fitted({&offsets}, -60.0, 4.2, 2.0)};
+  two[0].fit.values = {1.0, 1.0};
+  two[0].fit.sigmas = {0.01, 0.01};
+  EXPECT_EQ(choose_attribution(two, {1}, 0.0, jumps, options), nullptr);
+  jumps.jumps.push_back({20, 2});
+  EXPECT_EQ(choose_attribution(two, {1}, 0.0, jumps, options), two.data());
 }
 
 TEST(QuestionVerdict, AnAttributedGapIsNamedWithTheTestThatFoundIt) {
