@@ -30,9 +30,10 @@ constexpr double kAtLimitShare = 0.9;
 constexpr double kScrubMisfitFactor = 1.5;
 // How far they must disagree for a window to count as scrubbing whatever the steering does: a
 // caster that steers late (actuator or steering lag, late feedback) or is held at a lower
-// limit than the model states scrubs where nothing reaches the stated limit. Far above the
-// 1.4 times the median the clean runs' windows stay within.
-constexpr double kScrubAloneFactor = 4.0;
+// limit than the model states scrubs where nothing reaches the stated limit. Above the 1.4
+// times the median the clean runs' windows stay within; casters steering from angles their
+// sensors report 72 ms late scrub at 2.2-3.5 times it without reaching any limit.
+constexpr double kScrubAloneFactor = 2.0;
 // A wheel that turned by less than this (rad) may only have shown its encoder's noise.
 constexpr double kEncoderNoiseRad = 1e-2;
 
@@ -99,8 +100,9 @@ WindowSteering window_steering(const sim::PlantParams& plant, const RunData& run
 // the run's median moving window while some caster's steering rate over one of its rows
 // reached kAtLimitShare of the limit (the model's stated one, or the fastest the run steers
 // where that is lower or none is stated), or kScrubAloneFactor times as much whatever the
-// steering. The median is over the windows in which a wheel turned: a log that mostly stands
-// still would otherwise have a median of nothing, and every moving window would count.
+// steering, or kScrubMisfitFactor times as much next to such a window. The median is over the
+// windows in which a wheel turned: a log that mostly stands still would otherwise have a median of
+// nothing, and every moving window would count.
 std::vector<char> windows_scrubbing(const RobotModel& nominal, const RunData& run,
                                     const std::vector<Window>& windows) {
   std::vector<char> out(windows.size(), 0);
@@ -125,7 +127,17 @@ std::vector<char> windows_scrubbing(const RobotModel& nominal, const RunData& ru
         (d >= kScrubMisfitFactor * median && held) || d >= kScrubAloneFactor * median;
     out[j] = steering.moving[j] != 0 && scrubbing ? 1 : 0;
   }
-  return out;
+  // A scrub the window boundary cut: the neighbour of a window left out, where the casters
+  // still disagree kScrubMisfitFactor times the median (past what clean runs reach).
+  std::vector<char> tails = out;
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    const bool beside = (j > 0 && out[j - 1] != 0) || (j + 1 < windows.size() && out[j + 1] != 0);
+    if (beside && steering.moving[j] != 0 &&
+        steering.disagreement_m[j] >= kScrubMisfitFactor * median) {
+      tails[j] = 1;
+    }
+  }
+  return tails;
 }
 
 // 1/2 w |w|: its change over a step is the integral of |w| dw/dt, the slip of sim/effects.hpp.
