@@ -69,12 +69,16 @@ json question_json(const QuestionResult& q) {
   const auto misfits_json = [](const std::vector<MisfitTest>& tests) {
     json out = json::array();
     for (const auto& m : tests) {
+      json windows = json::array();  // jumps: each jump's first window (count 2: a pair)
+      for (const MisfitTest::Span& span : m.jumps)
+        windows.push_back({{"window", span.first}, {"count", span.count}});
       out.push_back({{"test", m.test},
                      {"channel", m.channel},
                      {"label", m.label},
                      {"z", number(m.z)},
                      {"share", number(m.share)},
-                     {"remnant", m.remnant}});
+                     {"remnant", m.remnant},
+                     {"jumps", windows}});
     }
     return out;
   };

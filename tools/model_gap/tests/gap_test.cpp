@@ -248,6 +248,16 @@ TEST(ReportTest, WritesJsonMarkdownPlotsAndTheAugmentedModel) {
   EXPECT_EQ(j["named_effects"][0]["question"], "sensor_to_pose");
   EXPECT_GT(j["named_effects"][0]["parameters"]["bias_rad_s"]["sigma"].get<double>(), 0.0);
   EXPECT_EQ(j["questions"].size(), 2U);
+  for (const nlohmann::json& q : j["questions"]) {
+    EXPECT_TRUE(q["attributed_gap"].is_array()) << "named by attribution: the test that found it";
+    for (const nlohmann::json& m : q["misfit_tests"]) {
+      EXPECT_TRUE(m["remnant"].is_boolean());
+      ASSERT_TRUE(m["jumps"].is_array());  // where a jumps test's jumps are
+      if (m["test"] != "jumps") {
+        EXPECT_TRUE(m["jumps"].empty());
+      }
+    }
+  }
   EXPECT_TRUE(std::filesystem::exists(dir / "report.md"));
   const RobotModel augmented = load_robot_model((dir / "model_augmented.yaml").string());
   // Folded into the robot's own gyro bias, the one the daemon's localization corrects with.
