@@ -149,6 +149,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "fifth-validation") return &kFifthValidationSeeds;
   if (name == "sixth-validation") return &kSixthValidationSeeds;
   if (name == "seventh-validation") return &kSeventhValidationSeeds;
+  if (name == "eighth-validation") return &kEighthValidationSeeds;
   return nullptr;
 }
 
@@ -161,7 +162,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "fourth-validation",
                                                  "fifth-validation",
                                                  "sixth-validation",
-                                                 "seventh-validation"};
+                                                 "seventh-validation",
+                                                 "eighth-validation"};
   return names;
 }
 
