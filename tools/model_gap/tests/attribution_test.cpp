@@ -17,30 +17,31 @@
 namespace swivel::model_gap {
 namespace {
 
+// Whether the question named `effect` and nothing else.
+::testing::AssertionResult named_alone(const QuestionResult& q, const std::string& effect) {
+  if (q.verdict != Verdict::kNamed || q.named.size() != 1 || q.named[0].name != effect)
+    return ::testing::AssertionFailure() << "not " << effect << " alone: " << q.summary;
+  return ::testing::AssertionSuccess();
+}
+
 // trike3 whose casters steer 0.093 s late where its model states no lag (the fifth validation
 // set's 15th library case, development data now). The lag shows only while casters swing:
 // its candidate removes 92 % of the command question's whitened residual (BIC -1027), but its
 // F test has the few degrees of freedom of those windows and reaches 4.96 sigma. Without it,
 // the residual jumps by up to 11 sigma where casters swing.
 TEST(GapAttribution, ASteeringLagTheMisfitTestsDetectIsNamed) {
-  const second::ValidationCase c = second::library_case(second::kFifthValidationSeeds.library, 14);
-  ASSERT_EQ(c.expected.size(), 1U);
-  ASSERT_EQ(c.expected[0].effect, "steering_lag");
-  const SecondRun run = load_second_run(c.spec, c.id);
-  const GapResult gap = analyse_gap(run.model, run.run);
+  const LibraryRun lag = library_run(second::kFifthValidationSeeds, 14, "steering_lag");
+  const GapResult gap = analyse_gap(lag.run.model, lag.run.run);
   const QuestionResult& q = gap.command;
-  ASSERT_EQ(q.verdict, Verdict::kNamed) << q.summary;
-  ASSERT_EQ(q.named.size(), 1U);
-  EXPECT_EQ(q.named[0].name, "steering_lag");
+  ASSERT_TRUE(named_alone(q, "steering_lag"));
   EXPECT_LT(q.named[0].z, QuestionOptions{}.min_z_name) << "named by attribution, not alone";
   ASSERT_EQ(q.attributed_gap.size(), 1U);
   EXPECT_GE(q.attributed_gap[0].z, QuestionOptions{}.min_z_misfit);
   EXPECT_NE(q.summary.find("is gone with it"), std::string::npos) << q.summary;
-  const double truth = c.expected[0].params.at(0).second;
   const double value = q.named[0].values.at(0);
   const double sigma = q.named[0].sigmas.at(0);
-  EXPECT_LT(std::abs(value - truth), 4.0 * sigma)
-      << "fitted " << value << " +- " << sigma << ", true " << truth;
+  EXPECT_LT(std::abs(value - lag.truth), 4.0 * sigma)
+      << "fitted " << value << " +- " << sigma << ", true " << lag.truth;
   EXPECT_EQ(gap.sensor.verdict, Verdict::kNoSignificantGap) << gap.sensor.summary;
 }
 
@@ -50,15 +51,10 @@ TEST(GapAttribution, ASteeringLagTheMisfitTestsDetectIsNamed) {
 // not as the replay's clipped command: two windows of wheel 1, where the limit changes the
 // prediction most, keep jumps of 12 noise sigmas of the much larger change it brings there.
 TEST(GapAttribution, JumpsLeftWhereANamedLimitActsAreItsApproximateForm) {
-  const second::ValidationCase c = second::library_case(second::kFifthValidationSeeds.library, 33);
-  ASSERT_EQ(c.expected.size(), 1U);
-  ASSERT_EQ(c.expected[0].effect, "accel_limit");
-  const SecondRun run = load_second_run(c.spec, c.id);
-  const GapResult gap = analyse_gap(run.model, run.run);
+  const LibraryRun limit = library_run(second::kFifthValidationSeeds, 33, "accel_limit");
+  const GapResult gap = analyse_gap(limit.run.model, limit.run.run);
   const QuestionResult& q = gap.command;
-  ASSERT_EQ(q.verdict, Verdict::kNamed) << q.summary;
-  ASSERT_EQ(q.named.size(), 1U);
-  EXPECT_EQ(q.named[0].name, "accel_limit");
+  ASSERT_TRUE(named_alone(q, "accel_limit"));
   EXPECT_NE(q.summary.find("(its form is approximate)"), std::string::npos) << q.summary;
   const QuestionOptions options;
   bool remnant_counts_otherwise = false;
@@ -70,7 +66,7 @@ TEST(GapAttribution, JumpsLeftWhereANamedLimitActsAreItsApproximateForm) {
   // The truth's keys ("linear_mps2") and the model's ("linear_acceleration_mps2") share the
   // axis, their first word.
   const auto axis = [](const std::string& key) { return key.substr(0, key.find('_')); };
-  for (const auto& param : c.expected[0].params) {
+  for (const auto& param : limit.spec.expected[0].params) {
     const std::string& key = param.first;
     const double truth = param.second;
     const auto k = static_cast<std::size_t>(

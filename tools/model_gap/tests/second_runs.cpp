@@ -2,6 +2,8 @@
 #include "second_runs.hpp"
 
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "swivel/model_gap/run_log_adapter.hpp"
 #include "swivel/robot_model_io.hpp"
@@ -14,6 +16,17 @@ SecondRun load_second_run(const second::RunSpec& spec, const std::string& name) 
   std::istringstream in(generated.run_csv);
   return {parse_robot_model(generated.nominal_model_yaml, name + ".yaml"),
           to_run_data(parse_run_log(in, name + ".csv"))};
+}
+
+LibraryRun library_run(const second::SeedRanges& seeds, std::size_t index,
+                       const std::string& effect) {
+  second::ValidationCase c = second::library_case(seeds.library, index);
+  if (c.expected.size() != 1 || c.expected[0].effect != effect || c.expected[0].params.empty()) {
+    throw std::logic_error(c.id + " does not hide " + effect + " alone");
+  }
+  const double truth = c.expected[0].params[0].second;
+  SecondRun run = load_second_run(c.spec, c.id);
+  return {std::move(c), std::move(run), truth};
 }
 
 }  // namespace swivel::model_gap

@@ -4,11 +4,13 @@
 // own readers as a user's files would be: the tests of the model-gap workflow on runs it did
 // not make.
 
+#include <cstddef>
 #include <string>
 
 #include "swivel/model_gap/run_data.hpp"
 #include "swivel/robot_model.hpp"
 #include "swivel/second/second_robot.hpp"
+#include "swivel/second/validation_set.hpp"
 
 namespace swivel::model_gap {
 
@@ -19,5 +21,16 @@ struct SecondRun {
 
 /// Generates `spec` and parses its CSV and YAML; `name` labels both in error messages.
 SecondRun load_second_run(const second::RunSpec& spec, const std::string& name);
+
+/// A library case of a development seed set, read back, with what it hides.
+struct LibraryRun {
+  second::ValidationCase spec;
+  SecondRun run;
+  double truth = 0.0;  ///< the hidden effect's first parameter
+};
+/// Library case `index` of `seeds`; throws std::logic_error unless it hides `effect` alone
+/// (the seed set's cases are not what the test was written for).
+LibraryRun library_run(const second::SeedRanges& seeds, std::size_t index,
+                       const std::string& effect);
 
 }  // namespace swivel::model_gap

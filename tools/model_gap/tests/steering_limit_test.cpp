@@ -132,10 +132,8 @@ TEST(SteeringLimit, CastersHeldAtALowerLimitThanStatedScrubAndAreNotCompared) {
 // windows 44 and 45, whose neighbour 46 keeps 2.9 times. Compared, window 46 kept jumps of 9
 // noise sigmas after the latency was fitted, and the sensor question was "unexplained".
 TEST(SteeringLimit, CastersSteeringLateAndTheScrubsTailAreNotCompared) {
-  const second::ValidationCase c = second::library_case(second::kFifthValidationSeeds.library, 29);
-  ASSERT_EQ(c.expected.size(), 1U);
-  ASSERT_EQ(c.expected[0].effect, "sensor_latency");
-  const SecondRun run = load_second_run(c.spec, c.id);
+  const LibraryRun late = library_run(second::kFifthValidationSeeds, 29, "sensor_latency");
+  const SecondRun& run = late.run;
   const SensorReplay sensors(run.model, run.run, 1.0);
   for (const std::size_t j : {44U, 45U, 46U, 56U, 70U}) {
     EXPECT_NE(sensors.scrubbing()[j], 0) << "window " << j;
@@ -145,8 +143,7 @@ TEST(SteeringLimit, CastersSteeringLateAndTheScrubsTailAreNotCompared) {
   ASSERT_EQ(gap.sensor.verdict, Verdict::kNamed) << gap.sensor.summary;
   ASSERT_EQ(gap.sensor.named.size(), 1U);
   EXPECT_EQ(gap.sensor.named[0].name, "sensor_latency");
-  const double truth = c.expected[0].params.at(0).second;
-  EXPECT_LT(std::abs(gap.sensor.named[0].values.at(0) - truth),
+  EXPECT_LT(std::abs(gap.sensor.named[0].values.at(0) - late.truth),
             3.0 * gap.sensor.named[0].sigmas.at(0));
 }
 
