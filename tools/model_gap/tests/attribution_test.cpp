@@ -25,12 +25,12 @@ namespace {
 }
 
 // trike3 whose casters steer 0.093 s late where its model states no lag (the fifth validation
-// set's 15th library case, development data now). The lag shows only while casters swing:
-// its candidate removes 92 % of the command question's whitened residual (BIC -1027), but its
-// F test has the few degrees of freedom of those windows and reaches 4.96 sigma. Without it,
+// set's 15th case with one hidden effect, development data now). The lag shows only while casters
+// swing: its candidate removes 92 % of the command question's whitened residual (BIC -1027), but
+// its F test has the few degrees of freedom of those windows and reaches 4.96 sigma. Without it,
 // the residual jumps by up to 11 sigma where casters swing.
 TEST(GapAttribution, ASteeringLagTheMisfitTestsDetectIsNamed) {
-  const LibraryRun lag = library_run(second::kFifthValidationSeeds, 14, "steering_lag");
+  const HiddenEffectRun lag = hidden_effect_run(second::kFifthValidationSeeds, 14, "steering_lag");
   const GapResult gap = analyse_gap(lag.run.model, lag.run.run);
   const QuestionResult& q = gap.command;
   ASSERT_TRUE(named_alone(q, "steering_lag"));
@@ -46,12 +46,12 @@ TEST(GapAttribution, ASteeringLagTheMisfitTestsDetectIsNamed) {
 }
 
 // cart4 at 21 Hz whose true acceleration limits (0.056 m/s^2, 0.107 rad/s^2) its model lacks
-// (the fifth validation set's 34th library case, development data now). The limits are fitted
-// within a sigma of the truth, but the generator's wheels reach them through a tyre force,
-// not as the replay's clipped command: two windows of wheel 1, where the limit changes the
+// (the fifth validation set's 34th case with one hidden effect, development data now). The limits
+// are fitted within a sigma of the truth, but the generator's wheels reach them through a tyre
+// force, not as the replay's clipped command: two windows of wheel 1, where the limit changes the
 // prediction most, keep jumps of 12 noise sigmas of the much larger change it brings there.
 TEST(GapAttribution, JumpsLeftWhereANamedLimitActsAreItsApproximateForm) {
-  const LibraryRun limit = library_run(second::kFifthValidationSeeds, 33, "accel_limit");
+  const HiddenEffectRun limit = hidden_effect_run(second::kFifthValidationSeeds, 33, "accel_limit");
   const GapResult gap = analyse_gap(limit.run.model, limit.run.run);
   const QuestionResult& q = gap.command;
   ASSERT_TRUE(named_alone(q, "accel_limit"));

@@ -18,9 +18,10 @@ SecondRun load_second_run(const second::RunSpec& spec, const std::string& name) 
           to_run_data(parse_run_log(in, name + ".csv"))};
 }
 
-LibraryRun library_run(const second::SeedRanges& seeds, std::size_t index,
-                       const std::string& effect) {
-  second::ValidationCase c = second::library_case(seeds.library, index);
+HiddenEffectRun hidden_effect_run(const second::SeedRanges& seeds, std::size_t index,
+                                  const std::string& effect) {
+  // Case `index` with one hidden effect: the last of the first index + 1 such cases.
+  second::ValidationCase c = second::validation_set(seeds, 0, index + 1, 0).back();
   if (c.expected.size() != 1 || c.expected[0].effect != effect || c.expected[0].params.empty()) {
     throw std::logic_error(c.id + " does not hide " + effect + " alone");
   }

@@ -22,15 +22,15 @@ struct SecondRun {
 /// Generates `spec` and parses its CSV and YAML; `name` labels both in error messages.
 SecondRun load_second_run(const second::RunSpec& spec, const std::string& name);
 
-/// A library case of a development seed set, read back, with what it hides.
-struct LibraryRun {
+/// A case of a development seed set with one hidden effect, read back, with what it hides.
+struct HiddenEffectRun {
   second::ValidationCase spec;
   SecondRun run;
   double truth = 0.0;  ///< the hidden effect's first parameter
 };
-/// Library case `index` of `seeds`; throws std::logic_error unless it hides `effect` alone
-/// (the seed set's cases are not what the test was written for).
-LibraryRun library_run(const second::SeedRanges& seeds, std::size_t index,
-                       const std::string& effect);
+/// The case `index` of `seeds` with one hidden effect; throws std::logic_error unless it hides
+/// `effect` alone (the seed set's cases are not what the test was written for).
+HiddenEffectRun hidden_effect_run(const second::SeedRanges& seeds, std::size_t index,
+                                  const std::string& effect);
 
 }  // namespace swivel::model_gap
