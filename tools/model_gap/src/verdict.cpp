@@ -144,16 +144,15 @@ FittedEffect fitted_effect(const Fitted& final, const CandidateScore& s, std::si
 
 namespace {
 
-void name_selection(const VerdictInputs& in, const QuestionOptions& options,
-                    const std::string& title, QuestionResult& result) {
-  const Fitted& final = *in.final;
-  const CandidateScore s = score_of(final);
-  std::size_t first = 0;
-  for (std::size_t e = 0; e < final.effects.size(); ++e) {
-    result.named.push_back(fitted_effect(final, s, e, first));
-    first += final.effects[e]->params.size();
-  }
-  result.augmented = model_with(*in.base, final.effects, final.fit.values);
+// Whether a misfit test is significant and as large as the noise: what makes a residual
+// unexplained, unless it is the selection's remnant.
+bool past_misfit_bar(const MisfitTest& m, const QuestionOptions& options) {
+  return m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
+}
+
+// The summary of a named selection `s` whose effects are in result.named.
+std::string named_summary(const CandidateScore& s, const QuestionResult& result,
+                          const QuestionOptions& options, const std::string& title) {
   std::string zs;
   for (const FittedEffect& fe : result.named) zs += (zs.empty() ? "" : ", ") + fmt(fe.z, 3);
   std::string sizes;
@@ -164,19 +163,31 @@ void name_selection(const VerdictInputs& in, const QuestionOptions& options,
     why = "the gap the misfit tests found without it (" + m.channel + " " + m.label + ", " +
           fmt(m.z, 3) + " sigma) is gone with it, the best candidate at " + zs + " sigma";
   }
-  result.summary = "Named " + s.label() + " (" + title + "): " + why + ", an RMS change of " +
-                   sizes + " noise sigmas; what remains shows no pattern";
+  std::string summary = "Named " + s.label() + " (" + title + "): " + why + ", an RMS change of " +
+                        sizes + " noise sigmas; what remains shows no pattern";
   const auto remnant =
-      std::find_if(result.misfits.begin(), result.misfits.end(), [&](const MisfitTest& m) {
-        return m.remnant && m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
-      });
+      std::find_if(result.misfits.begin(), result.misfits.end(),
+                   [&](const MisfitTest& m) { return m.remnant && past_misfit_bar(m, options); });
   if (remnant != result.misfits.end()) {
-    result.summary += " but where it acts: " + remnant->channel + " keeps " + remnant->label +
-                      " (" + fmt(remnant->size, 2) +
-                      " noise sigmas), each less than half the change it brings there (its form "
-                      "is approximate)";
+    summary += " but where it acts: " + remnant->channel + " keeps " + remnant->label + " (" +
+               fmt(remnant->size, 2) +
+               " noise sigmas), each less than half the change it brings there (its form is "
+               "approximate)";
   }
-  result.summary += ".";
+  return summary + ".";
+}
+
+void name_selection(const VerdictInputs& in, const QuestionOptions& options,
+                    const std::string& title, QuestionResult& result) {
+  const Fitted& final = *in.final;
+  const CandidateScore s = score_of(final);
+  std::size_t first = 0;
+  for (std::size_t e = 0; e < final.effects.size(); ++e) {
+    result.named.push_back(fitted_effect(final, s, e, first));
+    first += final.effects[e]->params.size();
+  }
+  result.augmented = model_with(*in.base, final.effects, final.fit.values);
+  result.summary = named_summary(s, result, options, title);
 }
 
 }  // namespace
@@ -184,7 +195,7 @@ void name_selection(const VerdictInputs& in, const QuestionOptions& options,
 const MisfitTest* counting_misfit(const std::vector<MisfitTest>& misfits,
                                   const QuestionOptions& options) {
   const auto counts = [&](const MisfitTest& m) {
-    return !m.remnant && m.z >= options.min_z_misfit && m.size >= options.min_misfit_size;
+    return !m.remnant && past_misfit_bar(m, options);
   };
   const auto first = std::find_if(misfits.begin(), misfits.end(), counts);
   return first != misfits.end() ? &*first : nullptr;
