@@ -311,9 +311,8 @@ double motion_apart_per_metre(const std::vector<Row>& a, const std::vector<Row>&
 }
 
 // The first wheel's contact: ground lost against what its true radius rolled, per metre.
-double first_wheel_skid(const RunSpec& spec) {
+double first_wheel_skid(const RunSpec& spec, const std::vector<Row>& rows) {
   const double r = design(spec.design).modules[0].wheel_radius_m * spec.truth.wheel_radius_scale[0];
-  const std::vector<Row> rows = simulate(spec);
   double lost = 0;
   double path = 0;
   for (std::size_t j = 1; j < rows.size(); ++j) {
@@ -326,14 +325,15 @@ double first_wheel_skid(const RunSpec& spec) {
 
 // Every wheel and steering axis of a caster robot is velocity-controlled from the nominal
 // geometry, and the stiff tyres reach their friction limit at a creep of mu / stiffness
-// (0.1-0.33 %). On four and six casters, one wheel whose radius is 1 % off skids by most of
-// it and the body moves as the other wheels let it: what the motion shows of that radius is
-// capped by the friction, and five times the error shows hardly more. Three casters share
-// it: their motion still grows with the error. All wheels off alike move the body by their
-// scale, as no wheel then works against the others.
+// (0.1-0.33 %). One wheel whose radius is 1 % off therefore skids by most of it, and the body
+// moves as the other wheels let it: less than an even share of what all wheels 1 % off give,
+// and five times the error moves it hardly more. What the motion shows of that radius is
+// capped by the friction. (With tyres of 20 per unit load the wheel rolls against the others
+// instead, and the test fails on every robot.)
 TEST(SecondRobotPhysics, AWheelTooLargeSkidsWhereTheOthersHoldTheBody) {
   for (const char* name : {"trike3", "cart4", "hex6"}) {
     RunSpec spec = short_run(name, 100, 15);
+    spec.duration_s = 10;
     spec.noise = false;
     const std::size_t n = design(name).wheel_count();
     const std::vector<Row> none = simulate(spec);
@@ -343,19 +343,15 @@ TEST(SecondRobotPhysics, AWheelTooLargeSkidsWhereTheOthersHoldTheBody) {
       s.truth.wheel_radius_scale[0] = first;
       return s;
     };
-    const double one_1 = motion_apart_per_metre(none, simulate(with_scales(1.01, 1.0)), 100);
+    const RunSpec one_wheel = with_scales(1.01, 1.0);
+    const std::vector<Row> one_rows = simulate(one_wheel);
+    const double one_1 = motion_apart_per_metre(none, one_rows, 100);
     const double one_5 = motion_apart_per_metre(none, simulate(with_scales(1.05, 1.0)), 100);
     const double all_1 = motion_apart_per_metre(none, simulate(with_scales(1.01, 1.01)), 100);
-    const double skid_1 = first_wheel_skid(with_scales(1.01, 1.0));
-    if (n == 3) {
-      EXPECT_LT(skid_1, 0.008) << name;
-      EXPECT_GT(one_5, 1.5 * one_1) << name;
-      EXPECT_GT(one_1, 0.2 * all_1) << name;
-    } else {
-      EXPECT_GT(skid_1, 0.007) << name;
-      EXPECT_LT(one_5, 1.5 * one_1) << name;
-      EXPECT_LT(one_1, 0.1 * all_1) << name;
-    }
+    EXPECT_NEAR(all_1, 0.01, 0.001) << name;
+    EXPECT_GT(first_wheel_skid(one_wheel, one_rows), 0.007) << name;
+    EXPECT_LT(one_1, 0.25 * all_1) << name;
+    EXPECT_LT(one_5, 1.5 * one_1) << name;
   }
 }
 
