@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "open_loop.hpp"
 #include "planner.hpp"
 #include "random.hpp"
 #include "swivel/second/second_robot.hpp"
@@ -341,6 +342,11 @@ void check(const RunSpec& spec) {
 }  // namespace
 
 std::vector<Row> simulate(const RunSpec& spec) {
+  return simulate_commanded(spec, nullptr, nullptr);
+}
+
+std::vector<Row> simulate_commanded(const RunSpec& spec, const std::vector<double>* commands,
+                                    std::vector<double>* used) {
   check(spec);
   const Design d = design(spec.design);
   const Robot robot(spec, d);
@@ -378,7 +384,12 @@ std::vector<Row> simulate(const RunSpec& spec) {
     const double t = static_cast<double>(k) * kStepS;
     if (k % plan_every == 0) {
       planner.update(t, s.pose);
-      for (int a = 0; a < 3; ++a) plan_cmd.push_back(planner.command()[a]);
+      const std::size_t period = plan_cmd.size() / 3;
+      for (std::size_t a = 0; a < 3; ++a) {
+        plan_cmd.push_back(commands != nullptr && 3 * period + a < commands->size()
+                               ? (*commands)[3 * period + a]
+                               : planner.command()[a]);
+      }
     }
     if (swpc) {  // the controller reads the steering encoders, as late as they report
       const std::vector<double> then = history.at(t - tr.sensor_delay_s);
@@ -387,7 +398,7 @@ std::vector<Row> simulate(const RunSpec& spec) {
             quantize_nearest(then[history.phi(i)] - robot.contact(i).offset, steer_counts);
       }
     }
-    robot.control(s, planner.command(), measured);
+    robot.control(s, &plan_cmd[plan_cmd.size() - 3], measured);
     robot.step(s);
     history.push(s);
   }
@@ -453,6 +464,7 @@ std::vector<Row> simulate(const RunSpec& spec) {
     previous_t = t;
     rows.push_back(std::move(row));
   }
+  if (used != nullptr) *used = plan_cmd;
   return rows;
 }
 

@@ -286,34 +286,6 @@ TEST(SecondRobotPhysics, CastersSwingByTheNoSlipLaw) {
   EXPECT_LT(servo, 0.05);
 }
 
-// How far the body's motion over each second of `b` departs from `a`'s (same commands), in the
-// body frame at the second's start, summed over the run, per metre of `a`'s path.
-double motion_apart_per_metre(const std::vector<Row>& a, const std::vector<Row>& b,
-                              double row_rate_hz) {
-  const auto step = static_cast<std::size_t>(row_rate_hz);
-  const auto in_body = [](const Row& from, const Row& to, double& x, double& y) {
-    const double dx = to.pose[0] - from.pose[0];
-    const double dy = to.pose[1] - from.pose[1];
-    const double c = std::cos(from.pose[2]);
-    const double s = std::sin(from.pose[2]);
-    x = c * dx + s * dy;
-    y = -s * dx + c * dy;
-  };
-  double apart = 0;
-  double path = 0;
-  for (std::size_t j = step; j < std::min(a.size(), b.size()); j += step) {
-    double ax = 0;
-    double ay = 0;
-    double bx = 0;
-    double by = 0;
-    in_body(a[j - step], a[j], ax, ay);
-    in_body(b[j - step], b[j], bx, by);
-    apart += std::hypot(bx - ax, by - ay);
-    path += std::hypot(ax, ay);
-  }
-  return apart / path;
-}
-
 // Every wheel and steering axis of a caster robot is velocity-controlled from the nominal
 // geometry, and the stiff tyres reach their friction limit at a creep of mu / stiffness
 // (0.1-0.33 %). One wheel whose radius is 1 % off therefore skids by most of it, and the body
@@ -344,6 +316,35 @@ TEST(SecondRobotPhysics, AWheelTooLargeSkidsWhereTheOthersHoldTheBody) {
     EXPECT_LT(one_1, 0.25 * all_1) << name;
     EXPECT_LT(one_5, 1.5 * one_1) << name;
   }
+}
+
+// The same, as geometry_footprint() measures it on the nominal robot's commands: a geometry the
+// wheels roll by moves the body in proportion (halving it halves the footprint), one caster
+// wheel held by five others does not. Nothing to measure when the geometry is nominal.
+TEST(SecondRobotPhysics, AGeometryFootprintGrowsWithItsSizeUnlessTheWheelSkids) {
+  RunSpec rolling = short_run("mini_diff", 50, 16);
+  rolling.duration_s = 10;
+  set_truth(rolling, "wheel_radius.right_scale=1.01");
+  const auto rolls = geometry_footprint(rolling);
+  ASSERT_TRUE(rolls.has_value());
+  EXPECT_NEAR(rolls->growth(), 2.0, 0.1);
+  EXPECT_TRUE(rolls->size_in_motion());
+  // The footprint is the body's, not the noise's: the same with noise on.
+  EXPECT_GT(rolls->full, 0.002);
+
+  RunSpec skidding = short_run("hex6", 50, 16);
+  skidding.duration_s = 10;
+  set_truth(skidding, "wheel_radius.module_1_scale=1.02");
+  const auto skids = geometry_footprint(skidding);
+  ASSERT_TRUE(skids.has_value());
+  EXPECT_LT(skids->growth(), 1.25);
+  EXPECT_FALSE(skids->size_in_motion());
+  EXPECT_LT(skids->full, 0.25 * rolls->full);
+
+  EXPECT_FALSE(geometry_footprint(short_run("hex6", 50, 16)).has_value());
+  RunSpec gyro_only = short_run("hex6", 50, 16);
+  set_truth(gyro_only, "gyro_bias.bias_rad_s=0.01");
+  EXPECT_FALSE(geometry_footprint(gyro_only).has_value());
 }
 
 TEST(SecondRobotPhysics, AccelerationStaysWithinTheRobotsLimit) {

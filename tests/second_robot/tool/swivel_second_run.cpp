@@ -133,6 +133,14 @@ int run(int argc, char** argv) {
       std::printf("wrote %s: the nominal model\n", model_out.c_str());
     }
     std::printf("expected: %s\n", expected_text(run.expected).c_str());
+    if (const auto f = geometry_footprint(spec)) {
+      std::printf(
+          "geometry footprint: the body moves %.3g per metre apart from the nominal geometry's, "
+          "%.3g at half the deviations (growth %.2f: %s)\n",
+          f->full, f->half, f->growth(),
+          f->size_in_motion() ? "the size is in the motion"
+                              : "friction-limited, size not in the motion");
+    }
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "swivel-second-run: %s\n", e.what());
     return swivel::cli::kUsageError;

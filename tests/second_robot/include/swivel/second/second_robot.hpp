@@ -10,6 +10,8 @@
 // tests/independent_robot and writes its files itself. README.md has the physics.
 
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -164,5 +166,35 @@ struct Row {
   std::vector<double> steering_servo_error_rad;  ///< swpc: servo reference minus true angle
 };
 std::vector<Row> simulate(const RunSpec& spec);
+
+/// How far the body's motion over each second of `b` departs from `a`'s (the same commands),
+/// in the body frame at the second's start, summed over the run, per metre of `a`'s path.
+double motion_apart_per_metre(const std::vector<Row>& a, const std::vector<Row>& b,
+                              double row_rate_hz);
+
+/// What a run's drivetrain geometry (wheel radii, track width, caster offsets, steering
+/// offsets) moves the body by, against the same run on the nominal geometry, with no noise:
+/// motion_apart_per_metre() with the truth's deviations as they are and halved.
+///
+/// A geometry the wheels roll by moves the body in proportion to it (growth 2). One wheel or
+/// caster off on an over-actuated robot whose stiff tyres hold it skids instead: its friction
+/// limit, not its size, sets what the body shows (growth near 1), and no log of the run carries
+/// the size.
+struct GeometryFootprint {
+  double full = 0.0;
+  double half = 0.0;
+  /// full / half (NaN when the halved geometry moves nothing).
+  [[nodiscard]] double growth() const {
+    return half > 0.0 ? full / half : std::numeric_limits<double>::quiet_NaN();
+  }
+  /// The body shows the size when halving it takes away at least a quarter of its footprint
+  /// (growth >= 4/3): a rolling geometry gives 2, one wheel or caster skidding 1.0-1.25. Near
+  /// the friction limit (a hex6 wheel 1 % large: 1.4) the halved size still rolls in part.
+  [[nodiscard]] bool size_in_motion() const { return growth() >= kMinFootprintGrowth; }
+  static constexpr double kMinFootprintGrowth = 4.0 / 3.0;
+};
+
+/// nullopt when the truth's geometry is the nominal robot's. Three simulations of the run.
+std::optional<GeometryFootprint> geometry_footprint(const RunSpec& spec);
 
 }  // namespace swivel::second
