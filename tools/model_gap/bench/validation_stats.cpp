@@ -57,6 +57,25 @@ double Proportion::value() const {
                : std::numeric_limits<double>::quiet_NaN();
 }
 
+namespace {
+
+// Nothing named by either question that the run does not hide.
+bool names_only_hidden(const battery::CaseOutcome& o) {
+  if (!o.error.empty()) return false;
+  for (const auto& named : o.named) {
+    for (const std::string& n : named) {
+      if (std::ranges::none_of(o.hidden, [&n](const std::vector<std::string>& h) {
+            return std::ranges::find(h, n) != h.end();
+          })) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
   SetFigures f;
   double total_cpu = 0.0;
@@ -89,6 +108,11 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
       case battery::RunKind::kLibrary:
         f.effect_noise_finding.add(!o.noise_findings.empty());
         f.named_right.add(o.correct && o.values_within_3_sigma);
+        if (o.size_in_motion.value_or(true)) {
+          f.named_right_size_in_motion.add(o.correct && o.values_within_3_sigma);
+        } else {
+          f.friction_limited_no_wrong_name.add(names_only_hidden(o));
+        }
         for (const auto& p : o.params) {
           if (!p.observable()) continue;
           f.within_1_sigma.add(p.deviation() <= 1.0);

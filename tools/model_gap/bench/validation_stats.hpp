@@ -64,7 +64,12 @@ struct SetFigures {
   /// (not a finding), and every run's calibrated values within 3 sigma of their truth.
   Proportion clean_calibrated;
   Proportion calibrated_within_3_sigma;
-  Proportion named_right;     ///< library runs: correct and values within 3 sigma
+  Proportion named_right;  ///< library runs: correct and values within 3 sigma
+  /// named_right split by CaseOutcome::size_in_motion: the runs whose geometry (if any) the
+  /// motion shows the size of, and those whose geometry it does not (friction-limited), on
+  /// which only "no name that was not hidden" can be asked.
+  Proportion named_right_size_in_motion;
+  Proportion friction_limited_no_wrong_name;
   Proportion outside_right;   ///< outside runs: the case's rule holds
   Proportion within_1_sigma;  ///< hidden parameters named and observable
   Proportion within_3_sigma;

@@ -192,6 +192,36 @@ TEST(BenchStatistics, CoverageOutsideItsBandIsMissed) {
   EXPECT_TRUE(t[4].met);
 }
 
+// Library runs whose geometry the motion does not show the size of are counted apart, on the
+// only question they can answer: whether anything was named that the run does not hide. The
+// judged figure still counts every library run.
+TEST(BenchStatistics, FrictionLimitedGeometryIsCountedApartAndNotJudged) {
+  std::vector<battery::CaseOutcome> runs;
+  runs.push_back(library(true, {}));
+  runs.back().size_in_motion = true;
+  runs.push_back(library(false, {}));  // no geometry hidden: counted with the size-in-motion runs
+  battery::CaseOutcome quiet = library(false, {});
+  quiet.size_in_motion = false;
+  quiet.hidden[0] = {"wheel_radius"};
+  runs.push_back(quiet);
+  battery::CaseOutcome right_name_off = quiet;
+  right_name_off.named[0] = {"wheel_radius"};
+  runs.push_back(right_name_off);
+  battery::CaseOutcome wrong_name = quiet;
+  wrong_name.named[1] = {"steering_lag"};
+  runs.push_back(wrong_name);
+  battery::CaseOutcome broken = quiet;
+  broken.error = "the workflow threw";
+  runs.push_back(broken);
+  const validation::SetFigures f = validation::figures(runs);
+  EXPECT_EQ(f.named_right.n, 6U);
+  EXPECT_EQ(f.named_right.hits, 1U);
+  EXPECT_EQ(f.named_right_size_in_motion.n, 2U);
+  EXPECT_EQ(f.named_right_size_in_motion.hits, 1U);
+  EXPECT_EQ(f.friction_limited_no_wrong_name.n, 4U);
+  EXPECT_EQ(f.friction_limited_no_wrong_name.hits, 2U);
+}
+
 // Repeats of one run: the estimates of a scale scatter by 0.001 about 1.02 while the reported
 // sigma is 0.002, twice too wide; a parameter not observable on one repeat is left out there,
 // and one of another effect is grouped on its own.

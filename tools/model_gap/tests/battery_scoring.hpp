@@ -11,6 +11,7 @@
 //            (a slippery floor may be named `slip`, the library's nearest law).
 
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,6 +76,9 @@ struct CaseOutcome {
   double wall_time_s = 0.0;
   double cpu_time_s = 0.0;  ///< CPU time of this thread's analysis
   std::string error;        ///< the workflow threw: its message (the case counts as wrong)
+  /// Library runs of the second generator whose hidden effect is drivetrain geometry: whether
+  /// the body's motion carries its size (swivel::second::GeometryFootprint); unset otherwise.
+  std::optional<bool> size_in_motion;
 };
 
 /// Scores `result` against what was hidden. `allowed_outside`: effects an outside case may
