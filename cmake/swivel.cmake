@@ -35,9 +35,12 @@ function(swivel_add_plugin kind name)
 endfunction()
 
 # A GoogleTest executable registered with ctest.
-#   swivel_add_test(NAME SOURCES ... [DEPS ...] [LABELS ...] [TIMEOUT s])
+#   swivel_add_test(NAME SOURCES ... [DEPS ...] [LABELS ...] [TIMEOUT s] [COST s])
+# COST: about how long the test runs where it is slowest (the sanitizer trees). ctest starts
+# the costliest first, on a tree without timings of its own (a fresh clone) too, so that a long
+# test does not start last and hold its stage up alone.
 function(swivel_add_test name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT;COST" "SOURCES;DEPS;LABELS" ${ARGN})
   if(NOT SWIVEL_HAVE_GTEST)
     # Without GoogleTest the target exists (folders may set its properties) but is neither
     # built nor registered.
@@ -54,4 +57,7 @@ function(swivel_add_test name)
   add_test(NAME ${name} COMMAND ${name})
   set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
                        ENVIRONMENT "SWIVEL_PLUGIN_PATH=${SWIVEL_PLUGIN_BUILD_DIR};SWIVEL_SOURCE_DIR=${PROJECT_SOURCE_DIR};SWIVEL_BUILD_DIR=${PROJECT_BINARY_DIR};CYCLONEDDS_URI=file://${PROJECT_SOURCE_DIR}/config/dds/loopback.xml")
+  if(ARG_COST)
+    set_tests_properties(${name} PROPERTIES COST ${ARG_COST})
+  endif()
 endfunction()
