@@ -191,8 +191,9 @@ void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
 }
 
 // Under the null (clean runs) a candidate's significance is a normal deviate: the share of
-// candidates at or above each z against the normal's upper tail. Optionally every z with its
-// expected normal quantile, for a quantile plot (tools/lab/null_quantiles.gp).
+// candidates at or above each z against the normal's upper tail, and the fits in the tail
+// from 3 sigma (the normal expects one in 740) by name. Optionally every z with its expected
+// normal quantile, effect and run, for a quantile plot (tools/lab/null_quantiles.gp).
 void print_null_calibration(const validation::SetFigures& f, const std::string& quantiles_path) {
   const char* names[2] = {"sensor to pose", "command to motion"};
   std::FILE* out = quantiles_path.empty() ? nullptr : std::fopen(quantiles_path.c_str(), "w");
@@ -200,23 +201,29 @@ void print_null_calibration(const validation::SetFigures& f, const std::string& 
     std::fprintf(stderr, "swivel-bench-model-gap: cannot write %s\n", quantiles_path.c_str());
   }
   for (std::size_t q = 0; q < 2; ++q) {
-    std::vector<double> z = f.clean_single_z[q];
-    if (z.empty()) continue;
-    std::sort(z.begin(), z.end());
+    std::vector<battery::SingleFit> fits = f.clean_single_fits[q];
+    if (fits.empty()) continue;
+    std::ranges::sort(fits, {}, &battery::SingleFit::z);
+    const auto n = static_cast<double>(fits.size());
     std::printf("    single candidates' z on clean runs, %s (%zu fits): share at or above",
-                names[q], z.size());
+                names[q], fits.size());
     for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
-      const auto above = static_cast<double>(z.end() - std::lower_bound(z.begin(), z.end(), t));
-      std::printf("  %.0f: %.2f %% (normal %.2f %%)", t,
-                  100.0 * above / static_cast<double>(z.size()),
+      const auto above = std::ranges::count_if(fits, [t](const auto& x) { return x.z >= t; });
+      std::printf("  %.0f: %.2f %% (normal %.2f %%)", t, 100.0 * static_cast<double>(above) / n,
                   50.0 * std::erfc(t / std::sqrt(2.0)));
     }
     std::printf("\n");
+    for (const auto& x : fits) {
+      if (x.z >= 3.0)
+        std::printf("      from 3 sigma: %-20s %5.2f  %s\n", x.effect.c_str(), x.z, x.run.c_str());
+    }
     if (out == nullptr) continue;
-    std::fprintf(out, "# %s: expected normal quantile, observed z (clean runs)\n", names[q]);
-    for (std::size_t i = 0; i < z.size(); ++i) {
-      const double p = (static_cast<double>(i) + 0.5) / static_cast<double>(z.size());
-      std::fprintf(out, "%.5f %.5f\n", validation::normal_quantile(p), z[i]);
+    std::fprintf(out, "# %s: expected normal quantile, observed z, effect, run (clean runs)\n",
+                 names[q]);
+    for (std::size_t i = 0; i < fits.size(); ++i) {
+      const double p = (static_cast<double>(i) + 0.5) / n;
+      std::fprintf(out, "%.5f %.5f %s %s\n", validation::normal_quantile(p), fits[i].z,
+                   fits[i].effect.c_str(), fits[i].run.c_str());
     }
     std::fprintf(out, "\n\n");
   }

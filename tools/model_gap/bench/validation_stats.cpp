@@ -96,8 +96,8 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         f.clean_calibrated.add(!o.calibrated.empty());
         if (o.error.empty()) f.clean_noise_ratios.push_back(o.max_noise_ratio);
         for (std::size_t q = 0; q < 2; ++q) {
-          f.clean_single_z[q].insert(f.clean_single_z[q].end(), o.single_z[q].begin(),
-                                     o.single_z[q].end());
+          f.clean_single_fits[q].insert(f.clean_single_fits[q].end(), o.single_fits[q].begin(),
+                                        o.single_fits[q].end());
         }
         f.clean_robots.insert(o.robot);
         (o.swpc ? f.clean_swpc : f.clean_differential) = true;

@@ -56,8 +56,8 @@ struct SetFigures {
   /// Clean runs where the sensor question reports noise larger than the model states.
   Proportion clean_noise_finding;
   std::vector<double> clean_noise_ratios;  ///< per clean run: CaseOutcome::max_noise_ratio
-  /// Clean runs, per question: every single-effect candidate's z (CaseOutcome::single_z).
-  std::array<std::vector<double>, 2> clean_single_z;
+  /// Clean runs, per question: every single-effect candidate (CaseOutcome::single_fits).
+  std::array<std::vector<battery::SingleFit>, 2> clean_single_fits;
   /// Runs whose hidden or outside effect left a noise finding (library and outside runs).
   Proportion effect_noise_finding;
   /// Clean runs on which the sensor question calibrated a parameter of the robot's own model

@@ -51,6 +51,35 @@ TEST(BenchScoring, CleanRunsAreRightOnlyWhenBothQuestionsAreQuiet) {
   EXPECT_NE(o.problem.find("command to motion"), std::string::npos) << o.problem;
 }
 
+// The null calibration's fits: single-effect candidates that fitted, by question, with their
+// effect and run; combinations and failed fits are not single fits.
+TEST(BenchScoring, SingleFitsKeepTheirEffectAndRun) {
+  GapResult r = quiet_result();
+  CandidateScore single;
+  single.effects = {"gyro_bias"};
+  single.ok = true;
+  single.z = {3.4};
+  CandidateScore pair = single;
+  pair.effects = {"gyro_bias", "gyro_scale"};
+  pair.z = {3.4, 1.0};
+  CandidateScore failed = single;
+  failed.ok = false;
+  r.sensor.candidates = {single, pair, failed};
+  single.effects = {"accel_limit"};
+  single.z = {0.5};
+  r.command.candidates = {single};
+  const battery::CaseOutcome o = battery::score("clean/7", battery::RunKind::kClean, {}, r);
+  ASSERT_EQ(o.single_fits[0].size(), 1U);
+  EXPECT_EQ(o.single_fits[0][0].effect, "gyro_bias");
+  EXPECT_DOUBLE_EQ(o.single_fits[0][0].z, 3.4);
+  EXPECT_EQ(o.single_fits[0][0].run, "clean/7");
+  ASSERT_EQ(o.single_fits[1].size(), 1U);
+  EXPECT_EQ(o.single_fits[1][0].effect, "accel_limit");
+  const validation::SetFigures f = validation::figures({o, o});
+  EXPECT_EQ(f.clean_single_fits[0].size(), 2U);
+  EXPECT_EQ(f.clean_single_fits[1].size(), 2U);
+}
+
 TEST(BenchScoring, LibraryRunsNeedTheRightNameInTheRightQuestionAndItsValue) {
   const std::vector<battery::HiddenEffect> hidden = {{"gyro_bias", {{"bias_rad_s", 0.005}}}};
   GapResult r = quiet_result();

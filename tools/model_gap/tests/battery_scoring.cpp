@@ -131,7 +131,8 @@ CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenE
     out.summary[i] = q->summary;
     for (const FittedEffect& f : q->named) out.named[i].push_back(f.name);
     for (const CandidateScore& c : q->candidates) {
-      if (c.effects.size() == 1 && c.ok && !c.z.empty()) out.single_z[i].push_back(c.z.front());
+      if (c.effects.size() == 1 && c.ok && !c.z.empty())
+        out.single_fits[i].push_back({c.z.front(), c.effects.front(), id});
     }
   }
   for (const NoiseFinding& f : r.sensor.noise_findings)

@@ -41,6 +41,14 @@ struct ParamCheck {
   [[nodiscard]] double deviation() const;  ///< |value - truth| / sigma
 };
 
+/// A single-effect candidate fitted on a run: its significance (a normal deviate under the
+/// null), the effect and the run, so that a tail under the null can be traced to its fits.
+struct SingleFit {
+  double z = 0.0;
+  std::string effect;
+  std::string run;
+};
+
 struct CaseOutcome {
   std::string id;
   std::string robot;
@@ -59,7 +67,7 @@ struct CaseOutcome {
   double max_noise_ratio = 0.0;
   /// Per question: each single-effect candidate's significance (z, a normal deviate under the
   /// null), for the calibration of clean runs.
-  std::array<std::vector<double>, 2> single_z;
+  std::array<std::vector<SingleFit>, 2> single_fits;
   bool correct = false;  ///< the case's rule holds
   /// Every named hidden effect within 3 sigma of its truth, jointly over its parameters (on
   /// the combinations the run fixes; the rest the workflow leaves at the model's values).
