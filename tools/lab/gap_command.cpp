@@ -51,8 +51,8 @@ int run_gap(const GapCommandOptions& o) {
       }
     }
   }
-  std::cout
-      << "motion capture (nuisances, fitted with the sensor question; never robot effects):\n";
+  std::cout << "motion capture and gyro timing (nuisances, fitted with the sensor question; never "
+               "robot effects):\n";
   for (const std::string& line : model_gap::truth_nuisance_lines(result))
     std::cout << "  " << line << "\n";
   for (const std::string& note : result.notes) std::cout << "note: " << note << "\n";

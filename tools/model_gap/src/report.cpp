@@ -376,8 +376,9 @@ std::string markdown(const GapResult& r, bool plots) {
     for (const std::string& line : fold.kept) md << "- kept in `effects:`: " << line << "\n";
     md << "\n";
   }
-  md << "## Motion capture\n\nFitted beside every candidate of the sensor question and never "
-        "named as robot effects (fix the motion-capture set-up with them):\n\n";
+  md << "## Motion capture and gyro timing\n\nFitted beside every candidate of the sensor "
+        "question and never named as robot effects (fix the motion-capture set-up with them; "
+        "the gyro's is where between rows the rate it samples belongs):\n\n";
   for (const std::string& line : truth_nuisance_lines(r)) md << "- " << line << "\n";
   md << "\n";
   for (const std::string& note : r.notes) md << "Note: " << note << "\n\n";

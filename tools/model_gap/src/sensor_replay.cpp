@@ -235,6 +235,12 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   if (fit_time_offset_)
     nuisance_.push_back(
         {"truth.time_offset_s", 0.0, 1e-2, -kMaxTimeOffsetS, kMaxTimeOffsetS, kNaN, true});
+  // Where between rows a sampled gyro's rate belongs: within half a row, scale a millisecond.
+  if (gyro_ && !run.gyro_mean_over_row) {
+    const double half_row =
+        0.5 * (run.t_s.back() - run.t_s.front()) / static_cast<double>(run.size() - 1);
+    nuisance_.push_back({"truth.gyro_shift_s", 0.0, 1e-3, -half_row, half_row, kNaN, true});
+  }
   // Scale: a millisecond a second.
   if (fit_clock_rate_)
     nuisance_.push_back({"truth.clock_rate", 0.0, 1e-3, -kMaxClockRate, kMaxClockRate, kNaN, true});
@@ -266,12 +272,45 @@ TruthNuisance SensorReplay::truth(std::span<const double> values) const {
     if (name == "truth.lever_y_m") n.lever_y_m = values[i];
     if (name == "truth.time_offset_s") n.time_offset_s = values[i];
     if (name == "truth.clock_rate") n.clock_rate = values[i];
+    if (name == "truth.gyro_shift_s") n.gyro_shift_s = values[i];
   }
   return n;
 }
 
-bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,
-                             std::size_t end_row) const {
+double SensorReplay::gyro_mean(std::size_t k, double gyro_shift_s) const {
+  const RunData& run = *run_;
+  // The logged value where the log declares row means, else the trapezoid of the readings at
+  // the row's ends (swivel/run_log.hpp). At a step of the rate within the row its error is at
+  // most half the step times dt, either way; the reading at t[k] taken as the mean would turn
+  // every step early, all one way.
+  if (run.gyro_mean_over_row) return run.gyro_radps[k];
+  if (gyro_shift_s == 0.0) return 0.5 * (run.gyro_radps[k - 1] + run.gyro_radps[k]);
+  // Readings standing for the rate at t[j] + shift, joined by straight lines: the mean over
+  // (t[k-1], t[k]] is that of the readings' own line over the interval moved back by the
+  // shift, which reaches into the neighbouring row (or holds the first and last readings).
+  const std::vector<double>& t = run.t_s;
+  const std::vector<double>& w = run.gyro_radps;
+  const double a = t[k - 1] - gyro_shift_s;
+  const double b = t[k] - gyro_shift_s;
+  const auto value = [&t, &w](std::size_t j, double at) {  // line from j to j + 1
+    if (j + 1 >= t.size()) return w.back();
+    const double f = std::clamp((at - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0);
+    return w[j] + f * (w[j + 1] - w[j]);
+  };
+  double sum = 0.0;
+  std::size_t j = k >= 3 ? k - 3 : 0;
+  for (; j + 1 < t.size() && t[j] < b; ++j) {
+    const double lo = std::max(a, t[j]);
+    const double hi = std::min(b, t[j + 1]);
+    if (hi > lo) sum += 0.5 * (value(j, lo) + value(j, hi)) * (hi - lo);
+  }
+  if (a < t.front()) sum += w.front() * (std::min(b, t.front()) - a);
+  if (b > t.back()) sum += w.back() * (b - std::max(a, t.back()));
+  return sum / (b - a);
+}
+
+bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start, std::size_t end_row,
+                             double gyro_shift_s) const {
   const RunData& run = *run_;
   const std::size_t n = std::min(run.size(), end_row);
   localization::EgConfig config;
@@ -314,16 +353,8 @@ bool SensorReplay::integrate(const sim::PlantParams& plant, const Pose2& start,
       if (!fit.ok) return false;
       delta = swpc::integrate_twist(fit.twist, dt);
     }
-    // The gyro's mean rate over (t[k-1], t[k]]: the logged value where the log declares row
-    // means, else the trapezoid of the readings at the row's ends (swivel/run_log.hpp). At a
-    // step of the rate within the row its error is at most half the step times dt, either
-    // way; the reading at t[k] taken as the mean would turn every step early, all one way.
-    double gyro_mean = 0.0;
-    if (gyro_) {
-      gyro_mean = run.gyro_mean_over_row ? run.gyro_radps[k]
-                                         : 0.5 * (run.gyro_radps[k - 1] + run.gyro_radps[k]);
-    }
-    if (!eg.step(delta, dt, gyro_mean, gyro_)) return false;
+    const double rate = gyro_ ? gyro_mean(k, gyro_shift_s) : 0.0;
+    if (!eg.step(delta, dt, rate, gyro_)) return false;
     const Pose2 p = eg.pose();
     track_[k] = Pose2{p.x_m, p.y_m, eg.unwrapped_yaw_rad()};
     encoder_yaw_[k] = encoder_yaw_[k - 1] + delta.yaw_rad;
@@ -365,7 +396,7 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
     while (end_row < run_->size() && run_->t_s[end_row - 1] < last + std::max(shift, 0.0))
       ++end_row;
   }
-  if (!integrate(plant, start_, end_row)) return false;
+  if (!integrate(plant, start_, end_row, truth.gyro_shift_s)) return false;
   // Encoders and gyro lag the robot by the delay, motion capture by its clock offset: the
   // motion capture's sample at t shows where the encoders put the robot at t + delay - offset.
   // The tracked body B sits on the robot, so the robot's own change between two samples is
@@ -397,7 +428,7 @@ void SensorReplay::path(const sim::PlantParams& plant, const TruthNuisance& trut
   out.assign(n, Pose2{kNaN, kNaN, kNaN});
   const Pose2 body = truth.body();
   // The robot starts where the tracked body at rest says it is.
-  if (!integrate(plant, compose(start_, inverse(body)), n)) return;
+  if (!integrate(plant, compose(start_, inverse(body)), n, truth.gyro_shift_s)) return;
   for (std::size_t k = 0; k < n; ++k) {
     const double t = run_->t_s[k];
     const Pose2 robot = pose_at(t + shift_at(plant.sensor_delay_s, truth, t));

@@ -279,6 +279,9 @@ std::vector<std::string> truth_nuisance_lines(const GapResult& r) {
           "motion capture's clock offset (late against the encoders, at the run's "
           "middle): " +
           plus_minus(v[i], sigma(i), 1e3, 1) + " ms");
+    } else if (n == "truth.gyro_shift_s") {
+      out.push_back("gyro's readings, where between rows the rate they sample belongs (later): " +
+                    plus_minus(v[i], sigma(i), 1e3, 2) + " ms");
     } else if (n == "truth.clock_rate") {
       out.push_back("motion capture's clock rate against the encoders' (the offset's growth): " +
                     plus_minus(v[i], sigma(i), 1e3, 2) + " ms/s");

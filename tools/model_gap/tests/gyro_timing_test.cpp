@@ -112,6 +112,62 @@ TEST(GyroTiming, ReadingsAtTheRowsIntegrateByTheTrapezoid) {
   EXPECT_LT(trapezoid.rms, 0.5 * means.rms) << trapezoid.rms << " vs " << means.rms;
 }
 
+// A yaw rate that ramps up from a row (t = 0.1 s, 2 rad/s^2) and holds from halfway through a
+// later row (0.21 s, 0.22 rad/s), read at 50 Hz rows: the trapezoid loses half the ramp's last
+// rise times half a row (1e-4 rad) and keeps that lag while the rate holds. Readings taken
+// as standing for the rate that much earlier (TruthNuisance::gyro_shift_s = -lag / rate) sum
+// to the true heading again; a log of row means has no such nuisance.
+TEST(GyroTiming, AShiftOfTheReadingsTakesTheLagOfRampsStartingOnRows) {
+  const RobotModel nominal = testing::robot("docent");
+  constexpr double kDt = 0.02;
+  constexpr double kRampStart = 0.1;
+  constexpr double kRampEnd = 0.21;
+  constexpr double kSlope = 2.0;
+  const auto rate = [](double t) {
+    return kSlope * std::clamp(t - kRampStart, 0.0, kRampEnd - kRampStart);
+  };
+  const auto heading = [](double t) {  // the rate's integral
+    const double ramp = std::clamp(t - kRampStart, 0.0, kRampEnd - kRampStart);
+    return 0.5 * kSlope * ramp * ramp +
+           kSlope * (kRampEnd - kRampStart) * std::max(0.0, t - kRampEnd);
+  };
+  RunData run;
+  run.source = "ramp";
+  run.wheel_rad.assign(2, {});
+  for (int k = 0; k <= 150; ++k) {
+    const double t = k * kDt;
+    run.t_s.push_back(t);
+    run.wheel_rad[0].push_back(0.0);
+    run.wheel_rad[1].push_back(0.0);
+    run.cmd_vx_mps.push_back(0.0);
+    run.cmd_vy_mps.push_back(0.0);
+    run.cmd_wz_radps.push_back(rate(t));
+    run.gyro_radps.push_back(rate(t));
+    run.truth_x_m.push_back(0.0);
+    run.truth_y_m.push_back(0.0);
+    run.truth_yaw_rad.push_back(heading(t));
+  }
+  run.truth_clock_shared = true;
+  run.truth_frame_is_robot = true;
+  const SensorReplay replay(nominal, run, 1.0);
+  ASSERT_EQ(replay.nuisance().size(), 1U);
+  EXPECT_EQ(replay.nuisance()[0].name, "truth.gyro_shift_s");
+  EXPECT_NEAR(replay.nuisance()[0].upper, 0.5 * kDt, 1e-12);
+  const sim::PlantParams plant = sim::resolve_plant(nominal);
+  std::vector<Pose2> path;
+  constexpr double kHold = kSlope * (kRampEnd - kRampStart);
+  const double lag = 0.5 * (kSlope * 0.01) * 0.01;  // half the last rise (0.02) times half a row
+  replay.path(plant, TruthNuisance{}, path);
+  EXPECT_NEAR(heading(run.t_s.back()) - path.back().yaw_rad, lag, 1e-9);
+  TruthNuisance shifted;
+  shifted.gyro_shift_s = -lag / kHold;
+  replay.path(plant, shifted, path);
+  EXPECT_NEAR(path.back().yaw_rad, heading(run.t_s.back()), 1e-9);
+
+  run.gyro_mean_over_row = true;
+  EXPECT_TRUE(SensorReplay(nominal, run, 1.0).nuisance().empty());
+}
+
 // Issue: the default docent (no limits), a gyro bias and +-0.2 % wheel radii hidden in its true
 // model, recorded as swiveld records; with gyro[k] taken as the row's mean the sensor question
 // answered "unexplained: dyaw_gyro isolated jumps". The trapezoid of the readings names both

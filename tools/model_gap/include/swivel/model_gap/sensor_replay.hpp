@@ -60,6 +60,10 @@ struct TruthNuisance {
   double lever_y_m = 0.0;
   double time_offset_s = 0.0;
   double clock_rate = 0.0;  ///< the offset grows by this much per second of the run
+  /// The gyro's readings (samples at the rows' times) stand for the rate this much later
+  /// between rows: summed by the trapezoid rule, a rate whose ramps start on rows turns the
+  /// heading late (the limiter's ramps start on the controller's ticks). Within half a row.
+  double gyro_shift_s = 0.0;
 
   /// The tracked body's pose in the robot frame.
   [[nodiscard]] Pose2 body() const { return Pose2{lever_x_m, lever_y_m, yaw_offset_rad}; }
@@ -123,7 +127,11 @@ class SensorReplay {
             std::vector<Pose2>& out) const;
 
  private:
-  bool integrate(const sim::PlantParams& plant, const Pose2& start, std::size_t end_row) const;
+  bool integrate(const sim::PlantParams& plant, const Pose2& start, std::size_t end_row,
+                 double gyro_shift_s) const;
+  /// The gyro's mean rate over row k (t[k-1], t[k]], its readings standing for the rate
+  /// `gyro_shift_s` later.
+  [[nodiscard]] double gyro_mean(std::size_t k, double gyro_shift_s) const;
   Pose2 pose_at(double t_s) const;
   double encoder_yaw_at(double t_s) const;
   /// How much later than its row the encoders' time is that the motion capture of a row at
