@@ -150,6 +150,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "sixth-validation") return &kSixthValidationSeeds;
   if (name == "seventh-validation") return &kSeventhValidationSeeds;
   if (name == "eighth-validation") return &kEighthValidationSeeds;
+  if (name == "ninth-validation") return &kNinthValidationSeeds;
   return nullptr;
 }
 
@@ -163,7 +164,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "fifth-validation",
                                                  "sixth-validation",
                                                  "seventh-validation",
-                                                 "eighth-validation"};
+                                                 "eighth-validation",
+                                                 "ninth-validation"};
   return names;
 }
 

@@ -460,7 +460,7 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   for (const SeedRanges& other :
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
-        kSeventhValidationSeeds, kEighthValidationSeeds}) {
+        kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -488,6 +488,7 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("sixth-validation"), &kSixthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("seventh-validation"), &kSeventhValidationSeeds);
   EXPECT_EQ(seed_ranges_named("eighth-validation"), &kEighthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("ninth-validation"), &kNinthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("ninth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }

@@ -74,7 +74,7 @@ int run(int argc, char** argv) {
   app.add_option("--index", index, "with --case: its index");
   app.add_option("--seeds", seeds,
                  "with --case: its seed ranges, smoke (default), validation (do not look at "
-                 "those while developing), or first-validation to eighth-validation (the "
+                 "those while developing), or first-validation to ninth-validation (the "
                  "earlier validation sets, development data now)")
       ->check(CLI::IsMember(swivel::second::seed_set_names()));
   app.add_option("--out", out, "run log (CSV)")->required();

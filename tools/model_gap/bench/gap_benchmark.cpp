@@ -6,16 +6,16 @@
 //                for comparison and never judged;
 //   validation   runs of the second robot generator (tests/second_robot) drawn from seed
 //                ranges never used while developing (validation_set.hpp: clean
-//                19798844-19799083, library 48952844-48952911, outside 39403243-39403254).
+//                42696577-42696816, library 13114082-13114149, outside 59591776-59591787).
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
-//   first- to eighth-validation  the same cases from the earlier validation sets' seeds
+//   first- to ninth-validation  the same cases from the earlier validation sets' seeds
 //                (7340001..., 28880001..., 72548103..., 26341837..., 98462895..., 76076734...,
-//                96537188..., 50642445...),
+//                96537188..., 50642445..., 19798844...),
 //                looked at after changes and are development data now: reported with the targets
 //                beside them, never judged (only with --set first-validation etc.).
 //
 //   swivel-bench-model-gap [--set development|validation|first-validation|...|
-//                                 eighth-validation|both] [--quick] [--jobs N]
+//                                 ninth-validation|both] [--quick] [--jobs N]
 //   swivel-bench-model-gap --case ID [--case ID ...]     development cases by id
 //   swivel-bench-model-gap --repeat N                    each library effect's smoke case N
 //                times over, the same robot, effect and rates with fresh noise and path: how
@@ -408,7 +408,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> sets = {"development", "validation", "both"};
   sets.insert(sets.end(), earlier.begin(), earlier.end());
   app.add_option("--set", set,
-                 "development, validation, first- to eighth-validation (earlier sets), or both")
+                 "development, validation, first- to ninth-validation (earlier sets), or both")
       ->check(CLI::IsMember(sets));
   app.add_flag("--quick", quick,
                "smoke test: the battery's subset and a few smoke-range runs; nothing judged");
