@@ -489,7 +489,7 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("seventh-validation"), &kSeventhValidationSeeds);
   EXPECT_EQ(seed_ranges_named("eighth-validation"), &kEighthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("ninth-validation"), &kNinthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("ninth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("tenth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
