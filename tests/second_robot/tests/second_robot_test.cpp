@@ -325,6 +325,56 @@ TEST(SecondRobotPhysics, CastersSwingByTheNoSlipLaw) {
   EXPECT_LT(servo, 0.05);
 }
 
+// Where the robot's steering rate limit holds a caster turning slower than trailing asks, its
+// tyre runs misaligned and drags the caster round with up to its grip times the caster offset.
+// The steering servo (finite stiffness) gives way: the caster runs ahead of the angle its
+// clamped rate has integrated, and its swing ends early. A replay that holds the caster exactly
+// at its clamp (the workflow's) fits the limit a little high. Once the tyre slides, the lead is
+// set by its grip: the largest lead is the same on every module of equal load and halves with
+// the friction coefficient.
+std::vector<double> largest_lead_at_the_clamp(double friction, std::size_t& rows_held) {
+  RunSpec spec = short_run("trike3", 100, 14);
+  spec.script = Script::kCircles;
+  spec.duration_s = 60;
+  spec.noise = false;
+  const double clamp = 0.2 * design("trike3").steering_rate_limit_radps;
+  set_truth(spec, "steering_rate_limit.radps=" + std::to_string(clamp));
+  set_truth(spec, "tyre.friction=" + std::to_string(friction));
+  const std::vector<Row> rows = simulate(spec);
+  std::vector<double> lead(3, 0.0);
+  rows_held = 0;
+  for (std::size_t j = 1; j < rows.size(); ++j) {
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double rate = (rows[j].true_steer_rad[i] - rows[j - 1].true_steer_rad[i]) /
+                          (rows[j].t_s - rows[j - 1].t_s);
+      if (std::abs(std::abs(rate) - clamp) > 0.005 * clamp) continue;  // not held at the clamp
+      // The servo error is reference minus true angle: negative along the rate is a lead.
+      lead[i] = std::max(lead[i], -std::copysign(rows[j].steering_servo_error_rad[i], rate));
+      ++rows_held;
+    }
+  }
+  return lead;
+}
+
+TEST(SecondRobotPhysics, AtTheSteeringRateLimitTheTyreDragsTheCasterAheadOfItsServo) {
+  std::size_t held = 0;
+  const std::vector<double> lead = largest_lead_at_the_clamp(0.9, held);
+  ASSERT_GT(held, 40U);
+  std::size_t held_slippery = 0;
+  const std::vector<double> slippery = largest_lead_at_the_clamp(0.45, held_slippery);
+  ASSERT_GT(held_slippery, 40U);
+  const double largest = *std::max_element(lead.begin(), lead.end());
+  EXPECT_GT(largest, 0.01);  // rad: far more than the encoders resolve
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (lead[i] < 0.5 * largest || slippery[i] == 0.0) continue;  // not held long in both
+    EXPECT_NEAR(lead[i], largest, 0.02 * largest) << "module " << i;
+    EXPECT_NEAR(slippery[i] / lead[i], 0.5, 0.02) << "module " << i;
+    ++compared;
+  }
+  EXPECT_GE(compared, 1U);
+}
+
 // Every wheel and steering axis of a caster robot is velocity-controlled from the nominal
 // geometry, and the stiff tyres reach their friction limit at a creep of mu / stiffness
 // (0.1-0.33 %). One wheel whose radius is 1 % off therefore skids by most of it, and the body
