@@ -25,7 +25,10 @@ for needed in rt_control_loop_test config_test swivel-test-swpc-kinematics; do
   grep -qx "$needed" <<<"$selected" || fail "tools/check's ASan selection does not build $needed"
 done
 
-ctest --test-dir "$build" -N -L '^source$' | grep -q 'Test *#' || fail "no test is labelled source"
+# Read whole first: grep -q leaves at its first match, and under pipefail a ctest still writing
+# to the closed pipe would fail the check.
+source_tests=$(ctest --test-dir "$build" -N -L '^source$')
+grep -q 'Test *#' <<<"$source_tests" || fail "no test is labelled source"
 [[ -z $(targets_of "$build" -L '^source$') ]] || fail "the source checks ask for a build"
 
 [[ $(targets_of "$build" -R '^swiveld_unit_verify$') == all ]] ||
