@@ -140,6 +140,38 @@ std::vector<char> windows_scrubbing(const RobotModel& nominal, const RunData& ru
   return tails;
 }
 
+// Every column of `run` has a value per row (NaN where a row has none): a RunData built by
+// hand, not read by load_run, may not.
+void check_columns(const RunData& run) {
+  const std::size_t n = run.size();
+  const auto check = [&](const std::vector<double>& column, const std::string& name) {
+    if (column.size() != n) {
+      throw std::invalid_argument("run " + run.source + ": column " + name + " has " +
+                                  std::to_string(column.size()) + " values for " +
+                                  std::to_string(n) + " rows");
+    }
+  };
+  check(run.cmd_vx_mps, "cmd_vx_mps");
+  check(run.cmd_vy_mps, "cmd_vy_mps");
+  check(run.cmd_wz_radps, "cmd_wz_radps");
+  check(run.gyro_radps, "gyro_radps");
+  check(run.truth_x_m, "truth_x_m");
+  check(run.truth_y_m, "truth_y_m");
+  check(run.truth_yaw_rad, "truth_yaw_rad");
+  const bool swpc = run.drivetrain == DrivetrainKind::kSwpc;
+  if (run.wheel_rad.size() != run.module_count ||
+      (swpc && run.steer_rad.size() != run.module_count)) {
+    throw std::invalid_argument("run " + run.source + " has " +
+                                std::to_string(run.wheel_rad.size()) + " wheel and " +
+                                std::to_string(run.steer_rad.size()) + " steering columns for " +
+                                std::to_string(run.module_count) + " modules");
+  }
+  for (std::size_t i = 0; i < run.module_count; ++i) {
+    check(run.wheel_rad[i], "wheel " + std::to_string(i + 1));
+    if (swpc) check(run.steer_rad[i], "steering " + std::to_string(i + 1));
+  }
+}
+
 // 1/2 w |w|: its change over a step is the integral of |w| dw/dt, the slip of sim/effects.hpp.
 double half_signed_square(double w) { return 0.5 * w * std::abs(w); }
 
@@ -161,6 +193,7 @@ void check_run_fits_model(const RobotModel& model, const RunData& run) {
     throw std::invalid_argument("run " + run.source + " has " + std::to_string(run.size()) +
                                 " samples; the workflow needs at least 10");
   }
+  check_columns(run);
 }
 
 Pose2 run_start_pose(const RunData& run) {

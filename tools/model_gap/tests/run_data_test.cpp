@@ -8,9 +8,12 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
+#include "gap_fixtures.hpp"
 #include "swivel/model_gap/run_log_adapter.hpp"
+#include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/run_log.hpp"
 
 namespace swivel::model_gap {
@@ -90,6 +93,44 @@ TEST(RunData, WrappedSteeringReadsLikeItsUnwrappedTwin) {
   for (int k = 0; k < kRows; ++k) {
     ASSERT_NEAR(a.truth_yaw_rad[k], b.truth_yaw_rad[k], 1e-12) << "row " << k;
   }
+}
+
+// A RunData built in code rather than read by load_run may lack a column; the replay refuses it
+// by name instead of reading past the end.
+TEST(RunData, AHandBuiltRunMissingAColumnIsRefusedByName) {
+  const RobotModel nominal = testing::robot("docent");
+  RunData run;
+  run.source = "by hand";
+  run.wheel_rad.assign(2, {});
+  for (int k = 0; k < 20; ++k) {
+    run.t_s.push_back(0.05 * k);
+    run.wheel_rad[0].push_back(0.0);
+    run.wheel_rad[1].push_back(0.0);
+    run.gyro_radps.push_back(0.0);
+    run.truth_x_m.push_back(0.0);
+    run.truth_y_m.push_back(0.0);
+    run.truth_yaw_rad.push_back(0.0);
+  }
+  const auto message = [&nominal](const RunData& r) {
+    try {
+      const SensorReplay replay(nominal, r, 1.0);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message(run).find("column cmd_vx_mps has 0 values for 20 rows"), std::string::npos)
+      << message(run);
+  run.cmd_vx_mps.assign(20, 0.0);
+  run.cmd_vy_mps.assign(20, 0.0);
+  run.cmd_wz_radps.assign(20, 0.0);
+  run.wheel_rad[1].pop_back();
+  EXPECT_NE(message(run).find("column wheel 2 has 19 values"), std::string::npos) << message(run);
+  run.wheel_rad.pop_back();
+  EXPECT_NE(message(run).find("1 wheel and 0 steering columns for 2 modules"), std::string::npos)
+      << message(run);
+  run.wheel_rad.emplace_back(20, 0.0);
+  EXPECT_EQ(message(run), "accepted");
 }
 
 }  // namespace

@@ -167,8 +167,8 @@ class SensorReplay {
 /// @throws std::invalid_argument when the run has no motion capture at all.
 Pose2 run_start_pose(const RunData& run);
 
-/// Checks that `run` fits `model` (drivetrain, module count) and has at least 10 rows.
-/// @throws std::invalid_argument naming both files.
+/// Checks that `run` fits `model` (drivetrain, module count), has at least 10 rows, and a value
+/// per row in every column. @throws std::invalid_argument naming the files or the column.
 void check_run_fits_model(const RobotModel& model, const RunData& run);
 
 }  // namespace swivel::model_gap
