@@ -57,26 +57,35 @@ int run(int argc, char** argv) {
   std::string seeds = "smoke";
   std::string out;
   std::string model_out;
-  app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff");
-  app.add_option("--true", truth,
-                 "NAME.PARAM=VALUE: the true robot (repeatable; with --case, changes the case's)");
-  app.add_option("--script", script, "waypoints, circles, spot_turns or mixed");
-  app.add_option("--rate", rate, "row rate, Hz (20-100)");
-  app.add_option("--duration", duration, "s");
-  app.add_option("--seed", seed);
-  app.add_flag("--no-accel-limits-in-model", no_accel, "the model states no acceleration limits");
-  app.add_flag("--no-steering-limit-in-model", no_steer, "the model states no steering rate limit");
-  app.add_flag("--fractional-counts", fractional,
-               "geared encoders: counts per revolution are not integers (needs a robot-model "
-               "reader with real-valued counts)");
-  app.add_flag("--no-noise", no_noise, "no sensor noise or clock jitter");
-  app.add_option("--case", case_kind, "a case of the smoke set: clean, library or outside");
-  app.add_option("--index", index, "with --case: its index");
+  auto* case_option =
+      app.add_option("--case", case_kind, "a case of a seed set: clean, library or outside");
+  app.add_option("--index", index, "with --case: its index")->needs(case_option);
   app.add_option("--seeds", seeds,
                  "with --case: its seed ranges, smoke (default), validation (do not look at "
                  "those while developing), or first-validation to ninth-validation (the "
                  "earlier validation sets, development data now)")
-      ->check(CLI::IsMember(swivel::second::seed_set_names()));
+      ->check(CLI::IsMember(swivel::second::seed_set_names()))
+      ->needs(case_option);
+  app.add_option("--true", truth,
+                 "NAME.PARAM=VALUE: the true robot (repeatable; with --case, changes the case's)");
+  app.add_flag("--no-noise", no_noise,
+               "no sensor noise or clock jitter (with --case, changes the case's)");
+  // What a case fixes itself: given with --case, they would be silently ignored.
+  app.add_option("--robot", robot, "trike3, cart4, hex6, mini_diff, wide_diff, mid_diff")
+      ->excludes(case_option);
+  app.add_option("--script", script, "waypoints, circles, spot_turns or mixed")
+      ->excludes(case_option);
+  app.add_option("--rate", rate, "row rate, Hz (20-100)")->excludes(case_option);
+  app.add_option("--duration", duration, "s")->excludes(case_option);
+  app.add_option("--seed", seed)->excludes(case_option);
+  app.add_flag("--no-accel-limits-in-model", no_accel, "the model states no acceleration limits")
+      ->excludes(case_option);
+  app.add_flag("--no-steering-limit-in-model", no_steer, "the model states no steering rate limit")
+      ->excludes(case_option);
+  app.add_flag("--fractional-counts", fractional,
+               "geared encoders: counts per revolution are not integers (needs a robot-model "
+               "reader with real-valued counts)")
+      ->excludes(case_option);
   app.add_option("--out", out, "run log (CSV)")->required();
   app.add_option("--model-out", model_out, "nominal model (YAML)");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;
@@ -102,6 +111,10 @@ int run(int argc, char** argv) {
       for (const auto& a : truth) {
         set_truth(spec, a);
         description += " (changed: " + a + ")";
+      }
+      if (no_noise) {
+        spec.noise = false;
+        description += " (changed: no noise)";
       }
     } else {
       spec.design = robot;
