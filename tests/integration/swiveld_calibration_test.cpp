@@ -226,7 +226,7 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
               calibrated_m, nominal_deg, calibrated_deg);
   // Better than the design values, by how much the calibration's noise decides. Seen: about
   // -78 % and -79 % most runs; -12 to -23 % on two of them, whose steering offsets came out
-  // 0.09-0.12 degrees off (2-3 of their reported sigmas), within the 0.5 degrees asked above;
+  // 0.08-0.12 degrees off (2-3 of their reported sigmas), within the 0.5 degrees asked above;
   // with 90-degree runs, which left the offsets 0.1-0.3 degrees off, the error doubled instead.
   // A bar at -25 % failed those two runs of a sound calibration.
   EXPECT_LT(calibrated_m, nominal_m);
