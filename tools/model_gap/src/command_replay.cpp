@@ -49,14 +49,34 @@ double mean_nearest(const std::vector<double>& t, const std::vector<double>& v, 
   return sum / (b - a);
 }
 
-// Longest step of the robot's limiter in the replay. A command step larger than the limit
-// allows in one step starts its ramp at the beginning of the step it falls in, whenever in
-// that step it came: stepped at the world's sub-step (4-5 ms) the replay's timing would move
-// in jumps of a sub-step, and a fitted command delay would sit on the flats between them.
+// Longest step of the robot's limiter in the replay: its output is sampled at each step's end.
 constexpr double kLimiterStepS = 0.0005;
 
-// The limiter's output averaged over [t0, t0 + h], stepped at kLimiterStepS on the mean of
-// the logged commands over each step.
+// Steps `limiter` through [a, b] on the logged commands as mean_nearest() reads them, each
+// row's command over its own span: a ramp starts exactly where its command changed. Fed one
+// mean command per step, a change larger than the limiter follows in a step started its ramp
+// at that step's beginning wherever in the step it came, so the replay stood still while the
+// command delay moved a change within a step and jumped at the step's edge. Where every change
+// fell on an edge (rows on the ticks of the robot's path controller, with no clock jitter),
+// the delay's slope was nil on one side and the fit could not move it.
+void step_through(motion::TwistLimiter& limiter, const RunData& run, double a, double b,
+                  std::size_t& hint) {
+  const std::size_t n = run.t_s.size();
+  const auto mid = [&run, n](std::size_t k) {
+    return k + 1 < n ? 0.5 * (run.t_s[k] + run.t_s[k + 1])
+                     : std::numeric_limits<double>::infinity();
+  };
+  while (hint + 1 < n && mid(hint) <= a) ++hint;
+  while (hint > 0 && mid(hint - 1) > a) --hint;
+  double from = a;
+  for (std::size_t k = hint; from < b && k < n; ++k) {
+    const double to = std::min(b, mid(k));
+    limiter.step(Twist2{run.cmd_vx_mps[k], run.cmd_vy_mps[k], run.cmd_wz_radps[k]}, to - from);
+    from = to;
+  }
+}
+
+// The limiter's output averaged over [t0, t0 + h], sampled at the end of each of its steps.
 Twist2 limited_mean(motion::TwistLimiter& limiter, const RunData& run, double t0, double h,
                     std::size_t& hint) {
   // Settled on a command that holds over the sub-step (most of a run): every step would
@@ -74,11 +94,8 @@ Twist2 limited_mean(motion::TwistLimiter& limiter, const RunData& run, double t0
   Twist2 sum{0.0, 0.0, 0.0};
   for (int m = 0; m < steps; ++m) {
     const double a = t0 + m * u;
-    std::size_t first = hint;
-    const Twist2 cmd{mean_nearest(run.t_s, run.cmd_vx_mps, a, a + u, first),
-                     mean_nearest(run.t_s, run.cmd_vy_mps, a, a + u, first),
-                     mean_nearest(run.t_s, run.cmd_wz_radps, a, a + u, hint)};
-    const Twist2 out = limiter.step(cmd, u);
+    step_through(limiter, run, a, a + u, hint);
+    const Twist2 out = limiter.value();
     sum.vx_mps += out.vx_mps;
     sum.vy_mps += out.vy_mps;
     sum.wz_radps += out.wz_radps;
