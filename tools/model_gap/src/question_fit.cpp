@@ -292,7 +292,10 @@ Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
       at_initial.set_nuisance(initial_nuisance(s.replay));
       const FitOutcome other = fit(at_initial.problem(f.effects, false),
                                    specs_of(f.effects, initial, {}, {}), options.fit);
-      if (other.ok && (!f.fit.ok || other.rss < f.fit.rss)) f.fit = other;
+      if (other.ok && (!f.fit.ok || other.rss < f.fit.rss)) {
+        f.fit = other;
+        f.nominal_beside = score(at_initial.problem({}, false), {});
+      }
     }
   }
   return f;
@@ -302,7 +305,11 @@ Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<
                   const FitOutcome& reference, const QuestionOptions& options) {
   Fitted f = run_fit(s, {&c}, initial, options);
   f.z = {added_z(f.fit, 0, c.params.size(), reference.rss, c.identity)};
-  f.size = {contribution(f.fit, reference, s.windows)};
+  // Against the nominal model at the same nuisance: where the nominal model's command delay
+  // ran to its bound standing in for a lag, the lag fitted without it changes the replay by
+  // what the delay had taken up.
+  const bool beside_other = f.nominal_beside.has_value() && f.nominal_beside->ok;
+  f.size = {contribution(f.fit, beside_other ? *f.nominal_beside : reference, s.windows)};
   f.rss_reference = reference.rss;
   f.bic_reference = reference.bic;
   return f;

@@ -16,6 +16,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -82,6 +83,9 @@ struct Fitted {
   FitOutcome fit;
   std::vector<double> z;     ///< per effect: significance
   std::vector<double> size;  ///< per effect: what it changes (contribution())
+  /// The nominal model at the nuisance this fit was made beside, where that is not the
+  /// question's (run_fit()); what the effect changes is measured against it.
+  std::optional<FitOutcome> nominal_beside;
   /// The nominal model on the same stretch (screening fits a shorter one).
   double rss_reference = 0.0;
   double bic_reference = 0.0;
