@@ -151,6 +151,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "seventh-validation") return &kSeventhValidationSeeds;
   if (name == "eighth-validation") return &kEighthValidationSeeds;
   if (name == "ninth-validation") return &kNinthValidationSeeds;
+  if (name == "tenth-validation") return &kTenthValidationSeeds;
   return nullptr;
 }
 
@@ -165,7 +166,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "sixth-validation",
                                                  "seventh-validation",
                                                  "eighth-validation",
-                                                 "ninth-validation"};
+                                                 "ninth-validation",
+                                                 "tenth-validation"};
   return names;
 }
 

@@ -510,7 +510,8 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
   for (const SeedRanges& other :
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
-        kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds}) {
+        kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
+        kTenthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -539,7 +540,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("seventh-validation"), &kSeventhValidationSeeds);
   EXPECT_EQ(seed_ranges_named("eighth-validation"), &kEighthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("ninth-validation"), &kNinthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("tenth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("tenth-validation"), &kTenthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("eleventh-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
