@@ -17,9 +17,11 @@
 // early and the robot's limiter would carry that lead through its whole ramp. The replay
 // takes the commands `command_delay_s` late, a timing nuisance fitted beside the effects;
 // what remains of each step's unknown instant is noise, which timing_variance() measures.
-// The robot's limiter is replayed in half-millisecond steps, so that the replay's timing moves
-// smoothly with the fitted delay (a limiter stepped with the world would start each ramp at
-// the start of the world's sub-step, and the delay would sit on the flats between sub-steps).
+// The robot's limiter is replayed in half-millisecond steps, each through every logged
+// command's own span within it, so that a ramp starts where its command changed and the
+// replay's timing moves smoothly with the fitted delay (a limiter fed one mean command per
+// step starts each ramp at the start of its step, and the delay would sit on the flats
+// between steps).
 //
 // A caster steers itself towards trailing its motion: the steering law phi_dot =
 // (n . v_s) / d - w pulls a trailing caster back at |v_s| / d (25 /s at 0.5 m/s on a 2 cm
