@@ -24,28 +24,29 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kSwpcSubstepS = 0.005;
 constexpr double kDifferentialSubstepS = 0.0025;
 
-// Mean over [a, b] of a logged column read as each row's value holding from halfway to the
-// row before to halfway to the row after (a < b, both within a row or two of each other).
+// A logged command is read as each row's value holding from halfway to the row before to
+// halfway to the row after: row k holds over [span_end(k - 1), span_end(k)).
+double span_end(const std::vector<double>& t, std::size_t k) {
+  return k + 1 < t.size() ? 0.5 * (t[k] + t[k + 1]) : std::numeric_limits<double>::infinity();
+}
+
+// Moves `hint` (a row near `a`) to the row that holds at `a`.
+void seek_row(const std::vector<double>& t, double a, std::size_t& hint) {
+  while (hint + 1 < t.size() && span_end(t, hint) <= a) ++hint;
+  while (hint > 0 && span_end(t, hint - 1) > a) --hint;
+}
+
+// Mean over [a, b] of a logged column so read (a < b, both within a row or two of each other).
 double mean_nearest(const std::vector<double>& t, const std::vector<double>& v, double a, double b,
                     std::size_t& hint) {
-  const std::size_t n = t.size();
-  // Row k holds over [m(k-1), m(k)), m(k) the midpoint after row k.
-  const auto mid = [&t, n](std::size_t k) {
-    return k + 1 < n ? 0.5 * (t[k] + t[k + 1]) : std::numeric_limits<double>::infinity();
-  };
-  while (hint + 1 < n && mid(hint) <= a) ++hint;
-  while (hint > 0 && mid(hint - 1) > a) --hint;
+  seek_row(t, a, hint);
   double sum = 0.0;
   double from = a;
-  std::size_t k = hint;
-  while (from < b) {
-    const double to = std::min(b, mid(k));
+  for (std::size_t k = hint; from < b && k < t.size(); ++k) {
+    const double to = std::min(b, span_end(t, k));
     sum += v[k] * (to - from);
     from = to;
-    if (k + 1 >= n) break;
-    ++k;
   }
-  if (from < b) sum += v[n - 1] * (b - from);
   return sum / (b - a);
 }
 
@@ -61,16 +62,10 @@ constexpr double kLimiterStepS = 0.0005;
 // the delay's slope was nil on one side and the fit could not move it.
 void step_through(motion::TwistLimiter& limiter, const RunData& run, double a, double b,
                   std::size_t& hint) {
-  const std::size_t n = run.t_s.size();
-  const auto mid = [&run, n](std::size_t k) {
-    return k + 1 < n ? 0.5 * (run.t_s[k] + run.t_s[k + 1])
-                     : std::numeric_limits<double>::infinity();
-  };
-  while (hint + 1 < n && mid(hint) <= a) ++hint;
-  while (hint > 0 && mid(hint - 1) > a) --hint;
+  seek_row(run.t_s, a, hint);
   double from = a;
-  for (std::size_t k = hint; from < b && k < n; ++k) {
-    const double to = std::min(b, mid(k));
+  for (std::size_t k = hint; from < b && k < run.t_s.size(); ++k) {
+    const double to = std::min(b, span_end(run.t_s, k));
     limiter.step(Twist2{run.cmd_vx_mps[k], run.cmd_vy_mps[k], run.cmd_wz_radps[k]}, to - from);
     from = to;
   }
