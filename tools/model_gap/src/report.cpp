@@ -85,6 +85,13 @@ json question_json(const QuestionResult& q) {
   j["misfit_tests"] = misfits_json(q.misfits);
   // Named by attribution: the test that found the gap the named effects take away.
   j["attributed_gap"] = misfits_json(q.attributed_gap);
+  json rivals = json::array();
+  for (const CandidateScore& r : q.rivals) {
+    json z = json::array();
+    for (double v : r.z) z.push_back(number(v));
+    rivals.push_back({{"effects", r.effects}, {"bic", number(r.bic)}, {"z", z}});
+  }
+  j["rivals"] = rivals;
   json chans = json::array();
   for (const auto& c : q.channels) {
     chans.push_back(

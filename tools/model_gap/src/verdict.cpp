@@ -177,6 +177,34 @@ std::string named_summary(const CandidateScore& s, const QuestionResult& result,
   return summary + ".";
 }
 
+// Single candidates other than the chosen one, fitted on every window and significant on
+// their own, whose BIC lies within kRivalBic of the chosen one's; best first.
+std::vector<CandidateScore> rivals_of(const VerdictInputs& in, const QuestionOptions& options) {
+  std::vector<CandidateScore> out;
+  if (in.chosen == nullptr || in.chosen->effects.size() != 1) return out;
+  for (std::size_t k = 0; k < in.singles->size(); ++k) {
+    const Fitted& f = (*in.singles)[k];
+    const bool full = in.full == nullptr || (*in.full)[k] != 0;
+    if (&f == in.chosen || !full || !f.fit.ok || !significant(f, options)) continue;
+    if (f.fit.bic - in.chosen->fit.bic < kRivalBic) out.push_back(score_of(f));
+  }
+  std::sort(out.begin(), out.end(),
+            [](const CandidateScore& a, const CandidateScore& b) { return a.bic < b.bic; });
+  return out;
+}
+
+// "The run barely tells it from X (BIC 2.2 higher, itself significant at 8.7 sigma)...".
+std::string rivals_sentence(const std::vector<CandidateScore>& rivals, double chosen_bic) {
+  if (rivals.empty()) return "";
+  std::string list;
+  for (const CandidateScore& r : rivals) {
+    list += (list.empty() ? "" : "; ") + r.label() + " (BIC " + fmt(r.bic - chosen_bic, 2) +
+            " higher, itself significant at " + fmt(r.z.empty() ? 0.0 : r.z[0], 3) + " sigma)";
+  }
+  return " The run barely tells it from " + list +
+         ": a run that moves in more ways, or what you know of the robot, decides.";
+}
+
 void name_selection(const VerdictInputs& in, const QuestionOptions& options,
                     const std::string& title, QuestionResult& result) {
   const Fitted& final = *in.final;
@@ -188,6 +216,8 @@ void name_selection(const VerdictInputs& in, const QuestionOptions& options,
   }
   result.augmented = model_with(*in.base, final.effects, final.fit.values);
   result.summary = named_summary(s, result, options, title);
+  result.rivals = rivals_of(in, options);
+  if (in.chosen != nullptr) result.summary += rivals_sentence(result.rivals, in.chosen->fit.bic);
 }
 
 }  // namespace

@@ -211,6 +211,45 @@ TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
       << result.summary;
 }
 
+// A named effect is reported with the significant singles whose BIC lies within kRivalBic of
+// its own (the run barely tells them apart), best first; not with one further off, one that
+// is not significant, or one not fitted on every window.
+TEST(QuestionVerdict, ANamedEffectComesWithTheRivalsTheRunBarelyTellsItFrom) {
+  const QuestionOptions options;
+  Candidate radius = candidate("wheel_radius");
+  Candidate offset = candidate("steering_offset");
+  Candidate scale = candidate("gyro_scale");
+  Candidate bias = candidate("gyro_bias");
+  Candidate slip = candidate("slip");
+  const std::vector<Fitted> singles = {
+      fitted({&radius}, -70.0, 8.8, 0.9),  // chosen
+      fitted({&offset}, -67.9, 8.7, 0.9),  // 2.1 apart: a rival
+      fitted({&scale}, -63.0, 9.0, 0.9),   // 7 apart: told apart
+      fitted({&bias}, -69.0, 3.0, 0.9),    // not significant on its own
+      fitted({&slip}, -69.5, 8.0, 0.9)};   // screened: not fitted on every window
+  const std::vector<char> full = {1, 1, 1, 1, 0};
+  const Fitted final = fitted({&radius}, -70.0, 8.8, 0.9);
+  const RobotModel base;
+  QuestionResult result;
+  give_verdict({Question::kSensorToPose, &base, &singles, singles.data(), &final, &full, 0.0},
+               options, result);
+  ASSERT_EQ(result.verdict, Verdict::kNamed);
+  ASSERT_EQ(result.rivals.size(), 1U);
+  EXPECT_EQ(result.rivals[0].effects, std::vector<std::string>{"steering_offset"});
+  EXPECT_NE(result.summary.find("The run barely tells it from steering_offset (BIC 2.1 higher, "
+                                "itself significant at 8.7 sigma)"),
+            std::string::npos)
+      << result.summary;
+
+  // Told apart from everything: no rival, no sentence.
+  const std::vector<Fitted> alone = {fitted({&radius}, -70.0, 8.8, 0.9),
+                                     fitted({&scale}, -63.0, 9.0, 0.9)};
+  QuestionResult clear;
+  give_verdict({Question::kSensorToPose, &base, &alone, alone.data(), &final}, options, clear);
+  EXPECT_TRUE(clear.rivals.empty());
+  EXPECT_EQ(clear.summary.find("barely tells"), std::string::npos) << clear.summary;
+}
+
 // A gap the misfit tests detected is put down to the best candidate by BIC alone: at
 // min_z_attribute, large enough, resolved, and with fewer parameters than the jumps it takes
 // away; never to a worse one when the best falls short.

@@ -193,8 +193,16 @@ struct QuestionResult {
   /// Named by attribution (QuestionOptions::min_z_attribute): the misfit test that detected
   /// the gap on the nominal residual, which the named effects take away. Empty otherwise.
   std::vector<MisfitTest> attributed_gap;
+  /// Named, one effect: other single candidates significant on their own whose BIC is within
+  /// kRivalBic of the named one's, best first. The run barely tells them apart (on circles
+  /// alone a caster's steering offset turns the body as a wheel-radius change does).
+  std::vector<CandidateScore> rivals;
   double wall_time_s = 0.0;
 };
+
+/// BIC apart below which a significant rival is reported beside a named effect: under 6 the
+/// evidence for the named one over it is less than strong (posterior odds below 20 : 1).
+inline constexpr double kRivalBic = 6.0;
 
 /// Decides one question on `base` (the model the question starts from).
 QuestionResult analyse_question(Question question, const RobotModel& base,
