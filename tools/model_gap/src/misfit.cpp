@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include "swivel/model_gap/fit.hpp"
@@ -133,12 +134,43 @@ MisfitTest result(std::string test, const std::string& channel, std::string labe
   return m;
 }
 
+// A caster whose steering axis the commands carry less than this many caster offsets over a
+// window, at their slowest there, barely rolls: its tyre, not its servo, holds its angle,
+// and what the servo was held off by can be let go within that window.
+constexpr double kBarelyRollsOffsets = 2.0;
+
+// How many of `jumps` in channel `info` lie in a window where its caster barely rolls (0 for
+// other channels).
+std::size_t jumps_where_caster_barely_rolls(const MisfitInputs& in, const ChannelInfo& info,
+                                            const std::vector<MisfitTest::Span>& jumps) {
+  if (info.kind != ChannelKind::kSteerAngle || info.module >= in.slowest_roll_offsets.size())
+    return 0;
+  const std::vector<double>& roll = in.slowest_roll_offsets[info.module];
+  return static_cast<std::size_t>(
+      std::count_if(jumps.begin(), jumps.end(), [&roll](const MisfitTest::Span& span) {
+        for (std::size_t j = span.first; j < span.first + span.count && j < roll.size(); ++j) {
+          if (roll[j] < kBarelyRollsOffsets) return true;
+        }
+        return false;
+      }));
+}
+
+std::string jumps_label(std::size_t count, std::size_t barely_rolling) {
+  if (count == 0) return "no jumps";
+  std::string label = std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "");
+  if (barely_rolling == count)
+    return label + (count > 1 ? ", all" : ",") + " where its caster barely rolls";
+  if (barely_rolling > 0)
+    return label + ", " + std::to_string(barely_rolling) + " where its caster barely rolls";
+  return label;
+}
+
 // Jumps: windows far outside the channel's robust spread (none when the channel has fewer
 // than 10 finite windows). A transient that the run and the replay place a little apart in
 // time moves residual from one window into the next: two neighbours, one of them far out,
 // that mostly cancel. What the model got wrong there is their sum (whitened: over the square
 // root of two), which is what counts.
-void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
+void jumps_test(const MisfitInputs& in, const ChannelInfo& info, const std::vector<double>& y,
                 std::vector<MisfitTest>& out) {
   const std::size_t w = y.size();
   std::vector<double> finite;
@@ -175,8 +207,7 @@ void jumps_test(const ChannelInfo& info, const std::vector<double>& y,
   // the scale of the other tests: 5 at the bar.
   const double second = z.size() > 1 ? z[1] : 0.0;
   const double strength = std::max(second / kJumpZ, z[0] / kLoneJumpZ);
-  test.label =
-      count > 0 ? std::to_string(count) + " isolated jump" + (count > 1 ? "s" : "") : "no jumps";
+  test.label = jumps_label(count, jumps_where_caster_barely_rolls(in, info, test.jumps));
   test.z = 5.0 * strength;
   test.size = strength * kJumpZ;
   out.push_back(std::move(test));
@@ -285,7 +316,7 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
   for (std::size_t c = 0; c < in.channels.size(); ++c) {
     std::vector<double> y(w);
     for (std::size_t j = 0; j < w; ++j) y[j] = in.residuals[c * w + j] / in.sigma[c * w + j];
-    jumps_test(in.channels[c], y, out);
+    jumps_test(in, in.channels[c], y, out);
     out.push_back(trend_test(in, c, y, rows));
     wheel_periodic_tests(in, c, y, rows, out);
   }

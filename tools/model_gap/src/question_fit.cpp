@@ -246,6 +246,7 @@ MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<doubl
   m.start_yaw_rad = replay.start_yaw_rad;
   m.wheel_sin_change = replay.wheel_sin_change;
   m.wheel_cos_change = replay.wheel_cos_change;
+  m.slowest_roll_offsets = replay.slowest_roll_offsets;
   return m;
 }
 

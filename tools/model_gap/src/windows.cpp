@@ -101,6 +101,28 @@ WindowMotion window_motion(const RunData& run, const std::vector<Window>& window
   return m;
 }
 
+std::vector<std::vector<double>> slowest_roll_offsets(const RunData& run,
+                                                      const std::vector<Window>& windows,
+                                                      const RobotModel& model) {
+  std::vector<std::vector<double>> out;
+  if (model.drivetrain != DrivetrainKind::kSwpc || !run.has_commands) return out;
+  for (const SwpcModuleParams& m : model.modules) {
+    std::vector<double>& roll = out.emplace_back(windows.size(), kNaN);
+    if (!(m.caster_offset_m > 0.0)) continue;
+    for (std::size_t j = 0; j < windows.size(); ++j) {
+      const Window& win = windows[j];
+      double slowest = std::numeric_limits<double>::infinity();
+      for (std::size_t k = win.a; k <= win.b; ++k) {
+        const double w = run.cmd_wz_radps[k];
+        slowest = std::min(
+            slowest, std::hypot(run.cmd_vx_mps[k] - w * m.y_m, run.cmd_vy_mps[k] + w * m.x_m));
+      }
+      roll[j] = slowest * (run.t_s[win.b] - run.t_s[win.a]) / m.caster_offset_m;
+    }
+  }
+  return out;
+}
+
 Pose2 anchor(const RunData& run, const std::vector<Pose2>& shape, std::size_t row,
              std::size_t half_width) {
   if (!has_mocap(run, row)) return Pose2{kNaN, kNaN, kNaN};

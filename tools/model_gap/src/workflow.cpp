@@ -421,6 +421,7 @@ QuestionReplay command_question_replay(const CommandReplay& commands, const Sens
     cq.start_yaw_rad.push_back(sensors.anchors_start()[j].yaw_rad);
   cq.wheel_sin_change = motion.wheel_sin_change;
   cq.wheel_cos_change = motion.wheel_cos_change;
+  cq.slowest_roll_offsets = slowest_roll_offsets(run, windows, nominal);
   return cq;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 namespace swivel::model_gap {
 namespace {
@@ -140,6 +141,40 @@ TEST(Misfit, JumpsNameTheirWindows) {
     ASSERT_EQ(t.jumps.size(), 3U);
     EXPECT_EQ(t.jumps[1].first, 60U);
     EXPECT_EQ(t.jumps[2].first, 61U);
+  }
+}
+
+// A caster's steering jumps say whether they came where the commands barely roll it (less
+// than two caster offsets over the window at their slowest): there a servo holding the caster
+// against its tyre can let go within one window (tools/lab/GAP.md, section 9).
+TEST(Misfit, ASteeringJumpSaysWhetherItsCasterBarelyRolled) {
+  MisfitInputs in = noise_only(12);
+  in.channels[2] = {"steer_2", "rad", Question::kCommandToMotion, ChannelKind::kSteerAngle, 1};
+  in.residuals[2 * kWindows + 30] += 30.0;
+  in.residuals[2 * kWindows + 80] -= 30.0;
+  // Module 1 rolls ten offsets a window, except at rest in window 30 and slowly in window 80.
+  in.slowest_roll_offsets.assign(2, std::vector<double>(kWindows, 10.0));
+  in.slowest_roll_offsets[1][30] = 0.0;
+  in.slowest_roll_offsets[1][80] = 1.5;
+  const auto label = [&in] {
+    for (const MisfitTest& t : misfit_tests(in)) {
+      if (t.test == "jumps" && t.channel == "steer_2") return t.label;
+    }
+    return std::string("no test");
+  };
+  EXPECT_EQ(label(), "2 isolated jumps, all where its caster barely rolls");
+  in.slowest_roll_offsets[1][80] = 2.5;
+  EXPECT_EQ(label(), "2 isolated jumps, 1 where its caster barely rolls");
+  in.slowest_roll_offsets[1][30] = 4.0;
+  EXPECT_EQ(label(), "2 isolated jumps");
+  // Another module's rest says nothing of this caster, nor a position channel's jumps.
+  in.slowest_roll_offsets[0][30] = 0.0;
+  EXPECT_EQ(label(), "2 isolated jumps");
+  in.residuals[0 * kWindows + 30] += 30.0;
+  for (const MisfitTest& t : misfit_tests(in)) {
+    if (t.test == "jumps" && t.channel == "dx") {
+      EXPECT_EQ(t.label, "1 isolated jump");
+    }
   }
 }
 

@@ -88,5 +88,34 @@ TEST(Windows, AnchorsAverageTheNoiseWithTheDeadReckonedShape) {
   EXPECT_LT(std::sqrt(averaged / count), 0.55 * std::sqrt(raw / count));
 }
 
+// How far the commands carry each caster's steering axis over a window at their slowest
+// there, in caster offsets: the arc's 0.3 m/s and 0.2 rad/s move an axis at (0.2, 0.1) by
+// (0.3 - 0.2 * 0.1, 0.2 * 0.2) = (0.28, 0.04) m/s; a row commanded to rest stops it.
+TEST(Windows, TheSlowestRollOfEachCasterIsInItsOwnOffsets) {
+  RunData run = arc_run(0.0, 0.0, 1);
+  const auto windows = make_windows(run, 1.0, 0.0, 40.0);
+  RobotModel model;
+  EXPECT_TRUE(slowest_roll_offsets(run, windows, model).empty()) << "differential";
+  model.drivetrain = DrivetrainKind::kSwpc;
+  model.modules.resize(2);
+  model.modules[0].x_m = 0.2;
+  model.modules[0].y_m = 0.1;
+  model.modules[0].caster_offset_m = 0.02;
+  model.modules[1].caster_offset_m = 0.04;
+  const std::size_t rest = windows[3].a + 10;
+  run.cmd_vx_mps[rest] = 0.0;
+  run.cmd_wz_radps[rest] = 0.0;
+  const auto roll = slowest_roll_offsets(run, windows, model);
+  ASSERT_EQ(roll.size(), 2U);
+  ASSERT_EQ(roll[0].size(), windows.size());
+  for (std::size_t j = 0; j < windows.size(); ++j) {
+    const double length = run.t_s[windows[j].b] - run.t_s[windows[j].a];
+    const double speed0 = j == 3 ? 0.0 : std::hypot(0.28, 0.04);
+    const double speed1 = j == 3 ? 0.0 : 0.3;
+    EXPECT_NEAR(roll[0][j], speed0 * length / 0.02, 1e-9) << j;
+    EXPECT_NEAR(roll[1][j], speed1 * length / 0.04, 1e-9) << j;
+  }
+}
+
 }  // namespace
 }  // namespace swivel::model_gap

@@ -54,6 +54,10 @@ struct MisfitInputs {
   std::vector<double> start_yaw_rad;                  ///< per window: world heading at its start
   std::vector<std::vector<double>> wheel_sin_change;  ///< [module][window]
   std::vector<std::vector<double>> wheel_cos_change;
+  /// [module][window], casters only (else empty): how far the commands carry the module's
+  /// steering axis over the window at their slowest there, in caster offsets. Below a few, the
+  /// caster barely rolls, and a servo holding it against its tyre can give way in one window.
+  std::vector<std::vector<double>> slowest_roll_offsets;
 };
 
 /// Every test on every channel it applies to, most significant first.

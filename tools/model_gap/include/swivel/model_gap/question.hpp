@@ -112,6 +112,7 @@ struct QuestionReplay {
   std::vector<double> start_yaw_rad;   ///< per window
   std::vector<std::vector<double>> wheel_sin_change;
   std::vector<std::vector<double>> wheel_cos_change;
+  std::vector<std::vector<double>> slowest_roll_offsets;  ///< MisfitInputs's
 };
 
 /// Parameters of one named effect as fitted, in the model's units.

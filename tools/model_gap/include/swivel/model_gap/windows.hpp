@@ -47,6 +47,13 @@ struct WindowMotion {
 
 WindowMotion window_motion(const RunData& run, const std::vector<Window>& windows);
 
+/// Per caster module of `model` and window (MisfitInputs::slowest_roll_offsets): the slowest
+/// commanded speed of the module's steering axis in the window times its length, over the
+/// caster offset. Empty for a differential robot or a run without commands.
+std::vector<std::vector<double>> slowest_roll_offsets(const RunData& run,
+                                                      const std::vector<Window>& windows,
+                                                      const RobotModel& model);
+
 /// Motion-capture pose at row `row`, its noise averaged over the rows within
 /// `half_width` rows that have motion capture: the offset between motion capture and the
 /// dead-reckoned path `shape` (any frame, one pose per row, unwrapped heading) is averaged
