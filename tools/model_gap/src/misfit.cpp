@@ -168,11 +168,16 @@ std::string jumps_label(std::size_t count, std::size_t barely_rolling) {
 // Jumps: windows far outside the channel's robust spread (none when the channel has fewer
 // than 10 finite windows). A transient that the run and the replay place a little apart in
 // time moves residual from one window into the next: two neighbours, one of them far out,
-// that mostly cancel. What the model got wrong there is their sum (whitened: over the square
-// root of two), which is what counts.
-void jumps_test(const MisfitInputs& in, const ChannelInfo& info, const std::vector<double>& y,
+// that mostly cancel. What the model got wrong there is their sum, which is what counts. Both
+// are taken in the channel's units, and the sum is whitened by the two windows' noise
+// together: a caster's transient often straddles a window of much steering (noisier) and a
+// quiet one, and whitened one by one the same rotation would not cancel.
+void jumps_test(const MisfitInputs& in, std::size_t c, const std::vector<double>& y,
                 std::vector<MisfitTest>& out) {
+  const ChannelInfo& info = in.channels[c];
   const std::size_t w = y.size();
+  const double* residual = in.residuals.data() + c * w;
+  const double* sigma = in.sigma.data() + c * w;
   std::vector<double> finite;
   std::vector<MisfitTest::Span> spans;  // per entry of `finite`
   const double far = kJumpZ * std::max(1.4826 * median_abs_finite(y), 1.0);
@@ -180,12 +185,14 @@ void jumps_test(const MisfitInputs& in, const ChannelInfo& info, const std::vect
     const double v = y[j];
     if (!std::isfinite(v)) continue;
     const double next = j + 1 < w ? y[j + 1] : std::numeric_limits<double>::quiet_NaN();
-    const double larger = std::max(std::abs(v), std::abs(next));
-    if (std::isfinite(next) && larger > far && std::abs(v + next) < 0.5 * larger) {
-      finite.push_back((v + next) / std::sqrt(2.0));
-      spans.push_back({j, 2});
-      ++j;
-      continue;
+    if (std::isfinite(next) && std::max(std::abs(v), std::abs(next)) > far) {
+      const double sum = residual[j] + residual[j + 1];
+      if (std::abs(sum) < 0.5 * std::max(std::abs(residual[j]), std::abs(residual[j + 1]))) {
+        finite.push_back(sum / std::hypot(sigma[j], sigma[j + 1]));
+        spans.push_back({j, 2});
+        ++j;
+        continue;
+      }
     }
     finite.push_back(v);
     spans.push_back({j, 1});
@@ -316,7 +323,7 @@ std::vector<MisfitTest> misfit_tests(const MisfitInputs& in) {
   for (std::size_t c = 0; c < in.channels.size(); ++c) {
     std::vector<double> y(w);
     for (std::size_t j = 0; j < w; ++j) y[j] = in.residuals[c * w + j] / in.sigma[c * w + j];
-    jumps_test(in, in.channels[c], y, out);
+    jumps_test(in, c, y, out);
     out.push_back(trend_test(in, c, y, rows));
     wheel_periodic_tests(in, c, y, rows, out);
   }

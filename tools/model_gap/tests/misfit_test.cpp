@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
 
 namespace swivel::model_gap {
 namespace {
@@ -116,6 +117,22 @@ TEST(Misfit, ATransientSplitAcrossTwoWindowsIsNotAJump) {
   same_sign.residuals[0 * kWindows + 30] += 14.0;
   same_sign.residuals[0 * kWindows + 31] += 14.0;
   EXPECT_GT(z_of(misfit_tests(same_sign), "jumps", "dx"), 5.0);
+}
+
+// A caster's transient often straddles a window of much steering, whose noise is larger, and
+// a quiet one: the same rotation, placed a little apart in time, cancels in the channel's
+// units, whitened one by one it would not (here 30 of 3 and -30 of 1: 10 and -30 sigmas).
+// Their sum is what counts, over the two windows' noise together.
+TEST(Misfit, ATransientSplitAcrossANoisyAndAQuietWindowIsNotAJump) {
+  MisfitInputs split = noise_only(10);
+  split.sigma[0 * kWindows + 30] = 3.0;
+  split.residuals[0 * kWindows + 30] = 3.0 * split.residuals[0 * kWindows + 30] + 30.0;
+  split.residuals[0 * kWindows + 31] -= 30.0;
+  EXPECT_LT(z_of(misfit_tests(split), "jumps", "dx"), 5.0);
+
+  MisfitInputs apart = split;
+  std::swap(apart.residuals[0 * kWindows + 31], apart.residuals[0 * kWindows + 50]);
+  EXPECT_GT(z_of(misfit_tests(apart), "jumps", "dx"), 5.0);
 }
 
 // The jumps test lists its jumps' windows (a pair that cancels as one span of two), for the
