@@ -152,6 +152,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "eighth-validation") return &kEighthValidationSeeds;
   if (name == "ninth-validation") return &kNinthValidationSeeds;
   if (name == "tenth-validation") return &kTenthValidationSeeds;
+  if (name == "eleventh-validation") return &kEleventhValidationSeeds;
   return nullptr;
 }
 
@@ -167,7 +168,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "seventh-validation",
                                                  "eighth-validation",
                                                  "ninth-validation",
-                                                 "tenth-validation"};
+                                                 "tenth-validation",
+                                                 "eleventh-validation"};
   return names;
 }
 

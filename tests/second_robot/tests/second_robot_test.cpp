@@ -511,7 +511,7 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
         kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
-        kTenthValidationSeeds}) {
+        kTenthValidationSeeds, kEleventhValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -541,7 +541,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("eighth-validation"), &kEighthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("ninth-validation"), &kNinthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("tenth-validation"), &kTenthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("eleventh-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("eleventh-validation"), &kEleventhValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("twelfth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 

@@ -6,16 +6,16 @@
 //                for comparison and never judged;
 //   validation   runs of the second robot generator (tests/second_robot) drawn from seed
 //                ranges never used while developing (validation_set.hpp: clean
-//                90474719-90474958, library 72502256-72502323, outside 88754006-88754017).
+//                48877460-48877699, library 33651945-33652012, outside 32770834-32770845).
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
-//   first- to tenth-validation  the same cases from the earlier validation sets' seeds
+//   first- to eleventh-validation  the same cases from the earlier validation sets' seeds
 //                (7340001..., 28880001..., 72548103..., 26341837..., 98462895..., 76076734...,
-//                96537188..., 50642445..., 19798844..., 42696577...),
+//                96537188..., 50642445..., 19798844..., 42696577..., 90474719...),
 //                looked at after changes and are development data now: reported with the targets
 //                beside them, never judged (only with --set first-validation etc.).
 //
 //   swivel-bench-model-gap [--set development|validation|first-validation|...|
-//                                 tenth-validation|both] [--quick] [--jobs N]
+//                                 eleventh-validation|both] [--quick] [--jobs N]
 //   swivel-bench-model-gap --case ID [--case ID ...]     development cases by id
 //   swivel-bench-model-gap --repeat N                    each library effect's smoke case N
 //                times over, the same robot, effect and rates with fresh noise and path: how
@@ -408,7 +408,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> sets = {"development", "validation", "both"};
   sets.insert(sets.end(), earlier.begin(), earlier.end());
   app.add_option("--set", set,
-                 "development, validation, first- to tenth-validation (earlier sets), or both")
+                 "development, validation, first- to eleventh-validation (earlier sets), or both")
       ->check(CLI::IsMember(sets));
   app.add_flag("--quick", quick,
                "smoke test: the battery's subset and a few smoke-range runs; nothing judged");
