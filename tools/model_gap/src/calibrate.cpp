@@ -15,16 +15,13 @@ const Fitted* choose_calibration(const VerdictInputs& in, const QuestionOptions&
   QuestionOptions gate = options;
   gate.min_z_name = options.min_z_calibrate;
   gate.min_effect_size = 0.0;
-  const Fitted* best = nullptr;
-  for (std::size_t k = 0; k < in.singles->size(); ++k) {
+  for (std::size_t k : singles_by_bic(*in.singles, in.full, in.nominal_bic)) {
     const Fitted& f = (*in.singles)[k];
-    if (in.full != nullptr && (*in.full)[k] == 0) continue;
-    if (f.effects.size() != 1 || !folds_into_robot_model(f.effects[0]->name, in.base->drivetrain))
-      continue;
-    if (!significant(f, gate) || !(f.fit.bic < in.nominal_bic)) continue;
-    if (best == nullptr || f.fit.bic < best->fit.bic) best = &f;
+    if (f.effects.size() == 1 && folds_into_robot_model(f.effects[0]->name, in.base->drivetrain) &&
+        significant(f, gate))
+      return &f;
   }
-  return best;
+  return nullptr;
 }
 
 void calibrate_own_parameters(const VerdictInputs& in, const QuestionOptions& options,

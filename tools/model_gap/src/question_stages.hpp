@@ -164,6 +164,10 @@ struct Shortfall {
   std::size_t effect = 0;
 };
 Shortfall shortfall(const Fitted& f, const QuestionOptions& options);
+/// Indices of the singles fitted on every window (`full`; nullptr: all) whose fit succeeded with
+/// a BIC below `below`, best (lowest BIC) first.
+std::vector<std::size_t> singles_by_bic(const std::vector<Fitted>& singles,
+                                        const std::vector<char>* full, double below);
 /// The single effect to select: the best (by BIC) of those fitted on every window that is
 /// significant and better than the nominal model (`nominal_bic`); none: nullptr.
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,

@@ -30,19 +30,19 @@ bool resolved(const Fitted& f, std::size_t e, double min_z) {
   return count == 0.0 || chi_square_z(chi2, count) >= min_z;
 }
 
-// Fully fitted singles better than the nominal model, best (by BIC) first.
-std::vector<std::size_t> by_bic(const std::vector<Fitted>& singles, const std::vector<char>& full,
-                                double nominal_bic) {
+}  // namespace
+
+std::vector<std::size_t> singles_by_bic(const std::vector<Fitted>& singles,
+                                        const std::vector<char>* full, double below) {
   std::vector<std::size_t> order;
   for (std::size_t k = 0; k < singles.size(); ++k) {
-    if (full[k] != 0 && singles[k].fit.ok && singles[k].fit.bic < nominal_bic) order.push_back(k);
+    if (full != nullptr && (*full)[k] == 0) continue;
+    if (singles[k].fit.ok && singles[k].fit.bic < below) order.push_back(k);
   }
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return singles[a].fit.bic < singles[b].fit.bic; });
   return order;
 }
-
-}  // namespace
 
 Shortfall shortfall(const Fitted& f, const QuestionOptions& options) {
   if (!f.fit.ok) return {Shortfall::Kind::kFitFailed, 0};
@@ -60,7 +60,7 @@ bool significant(const Fitted& f, const QuestionOptions& options) {
 
 const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vector<char>& full,
                             double nominal_bic, const QuestionOptions& options) {
-  for (std::size_t k : by_bic(singles, full, nominal_bic)) {
+  for (std::size_t k : singles_by_bic(singles, &full, nominal_bic)) {
     if (significant(singles[k], options)) return &singles[k];
   }
   return nullptr;
@@ -69,7 +69,7 @@ const Fitted* choose_single(const std::vector<Fitted>& singles, const std::vecto
 const Fitted* choose_attribution(const std::vector<Fitted>& singles, const std::vector<char>& full,
                                  double nominal_bic, const MisfitTest& gap,
                                  const QuestionOptions& options) {
-  const std::vector<std::size_t> order = by_bic(singles, full, nominal_bic);
+  const std::vector<std::size_t> order = singles_by_bic(singles, &full, nominal_bic);
   if (order.empty()) return nullptr;
   const Fitted& best = singles[order.front()];
   // k parameters can take away k isolated jumps whatever made them (one steering offset per

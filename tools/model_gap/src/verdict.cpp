@@ -182,14 +182,10 @@ std::string named_summary(const CandidateScore& s, const QuestionResult& result,
 std::vector<CandidateScore> rivals_of(const VerdictInputs& in, const QuestionOptions& options) {
   std::vector<CandidateScore> out;
   if (in.chosen == nullptr || in.chosen->effects.size() != 1) return out;
-  for (std::size_t k = 0; k < in.singles->size(); ++k) {
+  for (std::size_t k : singles_by_bic(*in.singles, in.full, in.chosen->fit.bic + kRivalBic)) {
     const Fitted& f = (*in.singles)[k];
-    const bool full = in.full == nullptr || (*in.full)[k] != 0;
-    if (&f == in.chosen || !full || !f.fit.ok || !significant(f, options)) continue;
-    if (f.fit.bic - in.chosen->fit.bic < kRivalBic) out.push_back(score_of(f));
+    if (&f != in.chosen && significant(f, options)) out.push_back(score_of(f));
   }
-  std::sort(out.begin(), out.end(),
-            [](const CandidateScore& a, const CandidateScore& b) { return a.bic < b.bic; });
   return out;
 }
 
