@@ -113,12 +113,10 @@ void print_runs(const std::vector<CaseOutcome>& outcomes) {
         o.correct ? (o.kind == RunKind::kLibrary && !o.values_within_3_sigma ? "name ok, value off"
                                                                              : "yes")
                   : "NO");
-    if (!o.correct) {
-      std::printf("    %s\n", o.problem.c_str());
-      for (std::size_t q = 0; q < 2; ++q) {  // what the question saw, misfit channel included
-        if (o.verdict[q] != Verdict::kNoSignificantGap)
-          std::printf("    %s\n", o.summary[q].c_str());
-      }
+    if (!o.correct) std::printf("    %s\n", o.problem.c_str());
+    for (std::size_t q = 0; q < 2; ++q) {  // what the question saw, misfit channel included
+      if (!o.undecided[q].empty() || (!o.correct && o.verdict[q] != Verdict::kNoSignificantGap))
+        std::printf("    %s\n", o.summary[q].c_str());
     }
     if (!o.size_in_motion.value_or(true))
       std::printf("    friction-limited geometry: its size is not in the body's motion\n");
@@ -261,6 +259,9 @@ bool report(const std::string& title, const std::vector<CaseOutcome>& outcomes, 
   print_figure("in-library effects named right, within 3 sigma", f.named_right);
   print_friction_limited_split(f);
   print_figure("outside effects: no wrong library name", f.outside_right);
+  print_figure("undecided on clean runs (leaning, not named)", f.clean_undecided);
+  print_figure("missed hidden effects the run leans towards", f.missed_undecided_hidden);
+  print_figure("undecided leaning to an effect not hidden", f.undecided_not_hidden);
   print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);
   print_figure("coverage: hidden parameters within 3 sigma", f.within_3_sigma);
   std::printf("  workflow errors: %zu; CPU per run: mean %.2f s, worst %.2f s\n", f.errors,

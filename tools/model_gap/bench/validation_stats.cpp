@@ -74,6 +74,17 @@ bool names_only_hidden(const battery::CaseOutcome& o) {
   return true;
 }
 
+// The undecided verdicts of a library or outside run (question.hpp, Undecided).
+void add_undecided(const battery::CaseOutcome& o, SetFigures& f) {
+  for (std::size_t q = 0; q < 2; ++q) {
+    const std::vector<std::string>& hidden = o.hidden[q];
+    const bool leans_hidden = std::ranges::find(hidden, o.undecided[q]) != hidden.end();
+    if (o.kind == battery::RunKind::kLibrary && !hidden.empty() && o.named[q].empty())
+      f.missed_undecided_hidden.add(leans_hidden);
+    if (!o.undecided[q].empty()) f.undecided_not_hidden.add(!leans_hidden);
+  }
+}
+
 }  // namespace
 
 SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
@@ -94,6 +105,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         f.command_false_alarm.add(command);
         f.clean_noise_finding.add(!o.noise_findings.empty());
         f.clean_calibrated.add(!o.calibrated.empty());
+        f.clean_undecided.add(!o.undecided[0].empty() || !o.undecided[1].empty());
         if (o.error.empty()) f.clean_noise_ratios.push_back(o.max_noise_ratio);
         for (std::size_t q = 0; q < 2; ++q) {
           f.clean_single_fits[q].insert(f.clean_single_fits[q].end(), o.single_fits[q].begin(),
@@ -108,6 +120,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
       case battery::RunKind::kLibrary:
         f.effect_noise_finding.add(!o.noise_findings.empty());
         f.named_right.add(o.correct && o.values_within_3_sigma);
+        add_undecided(o, f);
         if (o.size_in_motion.value_or(true)) {
           f.named_right_size_in_motion.add(o.correct && o.values_within_3_sigma);
         } else {
@@ -122,6 +135,7 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
       case battery::RunKind::kOutside:
         f.effect_noise_finding.add(!o.noise_findings.empty());
         f.outside_right.add(o.correct);
+        add_undecided(o, f);
         break;
     }
   }

@@ -70,7 +70,13 @@ struct SetFigures {
   /// which only "no name that was not hidden" can be asked.
   Proportion named_right_size_in_motion;
   Proportion friction_limited_no_wrong_name;
-  Proportion outside_right;   ///< outside runs: the case's rule holds
+  Proportion outside_right;  ///< outside runs: the case's rule holds
+  /// Undecided verdicts (question.hpp): clean runs with one in either question; library
+  /// questions that hide an effect and named nothing, whose undecided is that effect; and
+  /// among the undecided of library and outside runs, those leaning to an effect not hidden.
+  Proportion clean_undecided;
+  Proportion missed_undecided_hidden;
+  Proportion undecided_not_hidden;
   Proportion within_1_sigma;  ///< hidden parameters named and observable
   Proportion within_3_sigma;
   std::set<std::string> clean_robots;

@@ -251,6 +251,38 @@ TEST(BenchStatistics, FrictionLimitedGeometryIsCountedApartAndNotJudged) {
   EXPECT_EQ(f.friction_limited_no_wrong_name.hits, 2U);
 }
 
+// Undecided verdicts: on clean runs in either question; on library questions that hide an
+// effect and named nothing, whether the run leans towards that effect; and among all the
+// undecided of library and outside runs, those leaning to an effect not hidden there.
+TEST(BenchStatistics, UndecidedVerdictsAreCountedByWhatTheyLeanTowards) {
+  std::vector<battery::CaseOutcome> runs;
+  runs.push_back(clean("a", true, 50.0, false));
+  runs.back().undecided[1] = "accel_limit";
+  runs.push_back(clean("a", true, 50.0, false));
+  battery::CaseOutcome missed = library(false, {});
+  missed.hidden[1] = {"steering_lag"};
+  missed.undecided[1] = "steering_lag";
+  runs.push_back(missed);
+  battery::CaseOutcome leans_elsewhere = missed;
+  leans_elsewhere.undecided[1] = "actuator_lag";
+  runs.push_back(leans_elsewhere);
+  battery::CaseOutcome named = missed;  // named: not a miss, its undecided (none) not counted
+  named.named[1] = {"steering_lag"};
+  named.undecided[1].clear();
+  runs.push_back(named);
+  battery::CaseOutcome outside;
+  outside.kind = battery::RunKind::kOutside;
+  outside.undecided[0] = "slip";
+  runs.push_back(outside);
+  const validation::SetFigures f = validation::figures(runs);
+  EXPECT_EQ(f.clean_undecided.n, 2U);
+  EXPECT_EQ(f.clean_undecided.hits, 1U);
+  EXPECT_EQ(f.missed_undecided_hidden.n, 2U);
+  EXPECT_EQ(f.missed_undecided_hidden.hits, 1U);
+  EXPECT_EQ(f.undecided_not_hidden.n, 3U);
+  EXPECT_EQ(f.undecided_not_hidden.hits, 2U);
+}
+
 // Repeats of one run: the estimates of a scale scatter by 0.001 about 1.02 while the reported
 // sigma is 0.002, twice too wide; a parameter not observable on one repeat is left out there,
 // and one of another effect is grouped on its own.

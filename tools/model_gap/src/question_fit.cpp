@@ -108,7 +108,7 @@ std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
 // run barely reaches is precisely fitted yet changes nothing, and must not count as
 // significant.
 double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
-               const std::vector<double>& identity) {
+               const std::vector<double>& identity, SignificanceBasis* basis) {
   if (!with.ok || with.n <= with.values.size() || with.covariance.empty() ||
       with.naive_covariance.empty()) {
     return 0.0;
@@ -138,8 +138,14 @@ double added_z(const FitOutcome& with, std::size_t first, std::size_t count, dou
   // the windows the effect's parameters rest on: an acceleration limit is informed by a
   // handful of command steps, and its z must not be that of a hundred windows. Otherwise the
   // rows' own variance, from every row.
-  const double dof = inflation > 1.0 ? fewest_windows(with.effective_windows, first, count)
-                                     : static_cast<double>(with.n - p);
+  const bool widened = inflation > 1.0;
+  const double dof = widened ? fewest_windows(with.effective_windows, first, count)
+                             : static_cast<double>(with.n - p);
+  if (basis != nullptr) {
+    basis->windows = widened ? dof : 0.0;
+    basis->widening = inflation;
+    basis->z_many = chi_square_z(lr / inflation, static_cast<double>(rank));
+  }
   return wald_f_z(lr / inflation, static_cast<double>(rank), dof);
 }
 
@@ -305,7 +311,8 @@ Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
 Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<double>& initial,
                   const FitOutcome& reference, const QuestionOptions& options) {
   Fitted f = run_fit(s, {&c}, initial, options);
-  f.z = {added_z(f.fit, 0, c.params.size(), reference.rss, c.identity)};
+  f.basis.resize(1);
+  f.z = {added_z(f.fit, 0, c.params.size(), reference.rss, c.identity, f.basis.data())};
   // Against the nominal model at the same nuisance: where the nominal model's command delay
   // ran to its bound standing in for a lag, the lag fitted without it changes the replay by
   // what the delay had taken up.

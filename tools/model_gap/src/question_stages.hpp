@@ -78,11 +78,21 @@ class Evaluator {
 };
 
 /// One candidate (a single effect or a pair) as fitted.
+/// What an effect's significance rests on, where the residuals' correlation widened it: the
+/// windows its parameters' variance comes from (the F test's second degree of freedom) and
+/// how much that correlation widened their uncertainty along the fitted change.
+struct SignificanceBasis {
+  double windows = 0.0;  ///< 0: not widened; the rows' own variance, from every row
+  double widening = 1.0;
+  double z_many = 0.0;  ///< the same statistic against the normal (as if on many windows)
+};
+
 struct Fitted {
   std::vector<const Candidate*> effects;
   FitOutcome fit;
-  std::vector<double> z;     ///< per effect: significance
-  std::vector<double> size;  ///< per effect: what it changes (contribution())
+  std::vector<double> z;                 ///< per effect: significance
+  std::vector<SignificanceBasis> basis;  ///< per effect, where known (single candidates)
+  std::vector<double> size;              ///< per effect: what it changes (contribution())
   /// The nominal model at the nuisance this fit was made beside, where that is not the
   /// question's (run_fit()); what the effect changes is measured against it.
   std::optional<FitOutcome> nominal_beside;
@@ -129,9 +139,9 @@ std::vector<ParamSpec> specs_of(const std::vector<const Candidate*>& effects,
                                 const std::vector<ParamSpec>& nuisance,
                                 const std::vector<double>& nuisance_initial);
 /// Significance of the `count` parameters from `first` in a fit, against the same fit
-/// without them (`rss_without`), as a normal deviate.
+/// without them (`rss_without`), as a normal deviate; what it rests on in `basis` when given.
 double added_z(const FitOutcome& with, std::size_t first, std::size_t count, double rss_without,
-               const std::vector<double>& identity);
+               const std::vector<double>& identity, SignificanceBasis* basis = nullptr);
 /// The effects' part (the first p parameters) of a fit that had the nuisance free beside them;
 /// of the combinations it left open, those more than kUnfixedShare in the effects.
 FitOutcome effects_part(FitOutcome joint, std::size_t p);
@@ -214,7 +224,7 @@ FittedEffect fitted_effect(const Fitted& fit, const CandidateScore& s, std::size
                            std::size_t first);
 
 /// Sets result.verdict and result.summary from result.misfits and the selection, and when
-/// named, result.named and result.augmented.
+/// named, result.named and result.augmented; when nothing was selected, result.undecided.
 void give_verdict(const VerdictInputs& in, const QuestionOptions& options, QuestionResult& result);
 
 // --- Calibration (calibrate.cpp) ---

@@ -41,6 +41,22 @@ json effects_json(const std::vector<FittedEffect>& effects, Question q) {
   return out;
 }
 
+// The candidate a verdict with nothing named leans towards (question.hpp, Undecided), or null.
+json undecided_json(const std::optional<Undecided>& u) {
+  if (!u) return nullptr;
+  json params = json::object();
+  const CandidateScore& c = u->candidate;
+  for (std::size_t i = 0; i < c.param_names.size(); ++i)
+    params[c.param_names[i]] = {{"value", number(c.values[i])}, {"sigma", number(c.sigmas[i])}};
+  return {{"effects", c.effects},
+          {"parameters", params},
+          {"explained", number(c.explained)},
+          {"z", number(c.z.empty() ? 0.0 : c.z[0])},
+          {"z_on_many_windows", number(u->z_many)},
+          {"windows", number(u->windows)},
+          {"widening", number(u->widening)}};
+}
+
 json question_json(const QuestionResult& q) {
   json j;
   j["question"] = question_name(q.question);
@@ -92,6 +108,7 @@ json question_json(const QuestionResult& q) {
     rivals.push_back({{"effects", r.effects}, {"bic", number(r.bic)}, {"z", z}});
   }
   j["rivals"] = rivals;
+  j["undecided"] = undecided_json(q.undecided);
   json chans = json::array();
   for (const auto& c : q.channels) {
     chans.push_back(

@@ -6,6 +6,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -21,14 +22,52 @@ std::string fmt(double v, int precision = 3) {
   return s.str();
 }
 
-std::string unexplained_summary(const VerdictInputs& in, const MisfitTest& m,
-                                const std::string& title) {
+// The best single candidate by BIC, fitted on every window, when it takes most of the gap
+// and would be named but for the few windows it rests on: as on many windows (its statistic
+// against the normal, its sigmas unwidened) it passes every condition of significant()
+// (question.hpp, Undecided).
+std::optional<Undecided> undecided_of(const VerdictInputs& in, const QuestionOptions& options) {
+  const std::vector<std::size_t> order = singles_by_bic(*in.singles, in.full, kInf);
+  if (order.empty()) return std::nullopt;
+  const Fitted& f = (*in.singles)[order.front()];
+  if (f.basis.empty() || significant(f, options)) return std::nullopt;
+  Fitted on_many = f;
+  on_many.z = {f.basis[0].z_many};
+  for (double& sigma : on_many.fit.sigmas) sigma /= std::sqrt(f.basis[0].widening);
+  const CandidateScore s = score_of(f);
+  if (!(s.explained > kUndecidedShare) || !significant(on_many, options)) return std::nullopt;
+  return Undecided{s, f.basis[0].windows, f.basis[0].widening, f.basis[0].z_many};
+}
+
+// "the run leans towards steering_lag (steering_lag.time_constant_s = 0.057 +- 0.012): ...".
+std::string undecided_sentence(const Undecided& u, const QuestionOptions& options) {
+  const CandidateScore& c = u.candidate;
+  std::string values;
+  for (std::size_t k = 0; k < c.param_names.size(); ++k) {
+    values += (values.empty() ? "" : ", ") + c.param_names[k] + " = " + fmt(c.values[k], 4) +
+              " +- " + fmt(c.sigmas[k], 2);
+  }
+  const double z = c.z.empty() ? 0.0 : c.z[0];
+  return "the run leans towards " + c.label() + " (" + values + "): it takes " +
+         fmt(100.0 * c.explained, 2) + " % of what the nominal model leaves and would be " +
+         fmt(u.z_many, 2) + " sigma on many windows, but it rests on about " + fmt(u.windows, 2) +
+         " (its variance widened " + fmt(u.widening, 3) +
+         " times by the residuals' correlation), and on so few it is " + fmt(z, 2) +
+         " sigma, below " + fmt(options.min_z_name, 2) +
+         ". A run with more of the motion it acts in would decide.";
+}
+
+std::string unexplained_summary(const VerdictInputs& in, const QuestionOptions& options,
+                                const MisfitTest& m, const std::string& title,
+                                const std::optional<Undecided>& undecided) {
   std::string best = "none";
   if (in.chosen != nullptr)
     best = score_of(*in.final).label() + " (named nothing: it leaves this behind)";
-  return "Unexplained residual (" + title + "): " + m.channel + " " + m.label + " (" + fmt(m.z, 3) +
-         " sigma, " + fmt(m.size, 2) + " noise sigmas) after the best library candidate " + best +
-         ".";
+  std::string summary = "Unexplained residual (" + title + "): " + m.channel + " " + m.label +
+                        " (" + fmt(m.z, 3) + " sigma, " + fmt(m.size, 2) +
+                        " noise sigmas) after the best library candidate " + best + ".";
+  if (undecided) summary += " Undecided: " + undecided_sentence(*undecided, options);
+  return summary;
 }
 
 // Why a fit was not named, in words: significant()'s first failed condition ("below 5 sigma",
@@ -51,7 +90,11 @@ std::string not_named_because(const Fitted& f, const QuestionOptions& options) {
 }
 
 std::string no_gap_summary(const VerdictInputs& in, const QuestionOptions& options,
-                           const std::string& title) {
+                           const std::string& title, const std::optional<Undecided>& undecided) {
+  if (undecided) {
+    return "No significant gap (" + title +
+           "), but undecided: " + undecided_sentence(*undecided, options);
+  }
   const Fitted* best = nullptr;
   for (const Fitted& f : *in.singles) {
     if (!f.fit.ok || f.z.empty()) continue;
@@ -229,12 +272,13 @@ const MisfitTest* counting_misfit(const std::vector<MisfitTest>& misfits,
 
 void give_verdict(const VerdictInputs& in, const QuestionOptions& options, QuestionResult& result) {
   const std::string title = question_title(in.question);
+  if (in.chosen == nullptr) result.undecided = undecided_of(in, options);
   if (const MisfitTest* m = counting_misfit(result.misfits, options); m != nullptr) {
     result.verdict = Verdict::kUnexplained;
-    result.summary = unexplained_summary(in, *m, title);
+    result.summary = unexplained_summary(in, options, *m, title, result.undecided);
   } else if (in.chosen == nullptr) {
     result.verdict = Verdict::kNoSignificantGap;
-    result.summary = no_gap_summary(in, options, title);
+    result.summary = no_gap_summary(in, options, title, result.undecided);
   } else {
     result.verdict = Verdict::kNamed;
     name_selection(in, options, title, result);

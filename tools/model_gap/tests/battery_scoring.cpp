@@ -129,6 +129,7 @@ CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenE
     const std::size_t i = index_of(q->question);
     out.verdict[i] = q->verdict;
     out.summary[i] = q->summary;
+    if (q->undecided) out.undecided[i] = q->undecided->candidate.label();
     for (const FittedEffect& f : q->named) out.named[i].push_back(f.name);
     for (const CandidateScore& c : q->candidates) {
       if (c.effects.size() == 1 && c.ok && !c.z.empty())

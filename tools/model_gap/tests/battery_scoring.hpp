@@ -60,6 +60,9 @@ struct CaseOutcome {
   std::array<std::vector<std::string>, 2> named;   ///< per question: named effects
   std::array<Verdict, 2> verdict = {Verdict::kNoSignificantGap, Verdict::kNoSignificantGap};
   std::array<std::string, 2> summary;
+  /// Per question: the candidate a verdict with nothing named leans towards (Undecided), or
+  /// empty.
+  std::array<std::string, 2> undecided;
   /// Sensor question: channels whose noise is larger than the model states (NoiseFinding).
   std::vector<std::string> noise_findings;
   /// Sensor question: the largest ratio over channels of the noise every window has to what

@@ -266,6 +266,27 @@ TEST(ReportTest, WritesJsonMarkdownPlotsAndTheAugmentedModel) {
   ASSERT_EQ(j["model_augmented"]["folded"].size(), 1U);
   EXPECT_EQ(j["model_augmented"]["folded"][0].get<std::string>().rfind("gyro_bias.bias_rad_s", 0),
             0U);
+  EXPECT_TRUE(j["questions"][1]["undecided"].is_null()) << "nothing the run leans towards";
+  // A lean (as give_verdict() sets it) with its figures.
+  GapResult leaning = r;
+  CandidateScore lag;
+  lag.effects = {"steering_lag"};
+  lag.param_names = {"steering_lag.time_constant_s"};
+  lag.values = {0.057};
+  lag.sigmas = {0.012};
+  lag.z = {3.8};
+  lag.explained = 0.71;
+  leaning.command.undecided = Undecided{lag, 6.1, 16.9, 8.6};
+  write_report(leaning, dir.string());
+  std::ifstream again(dir / "report.json");
+  const nlohmann::json u = nlohmann::json::parse(again)["questions"][1]["undecided"];
+  EXPECT_EQ(u["effects"][0], "steering_lag");
+  EXPECT_DOUBLE_EQ(u["parameters"]["steering_lag.time_constant_s"]["value"].get<double>(), 0.057);
+  EXPECT_DOUBLE_EQ(u["explained"].get<double>(), 0.71);
+  EXPECT_DOUBLE_EQ(u["z"].get<double>(), 3.8);
+  EXPECT_DOUBLE_EQ(u["z_on_many_windows"].get<double>(), 8.6);
+  EXPECT_DOUBLE_EQ(u["windows"].get<double>(), 6.1);
+  EXPECT_DOUBLE_EQ(u["widening"].get<double>(), 16.9);
   // A fixed command, only asking whether gnuplot is installed.
   if (std::system("gnuplot --version > /dev/null 2>&1") == 0) {  // NOLINT(cert-env33-c)
     EXPECT_TRUE(std::filesystem::exists(dir / "trajectory.png"));

@@ -183,6 +183,82 @@ TEST(QuestionVerdict, NoSignificantGapSaysWhyAStrongCandidateWasNotNamed) {
       << result.summary;
 }
 
+// A single that takes three quarters of the nominal residual (rss 5 of 20) at 3.8 sigma, which
+// would be 8.6 on many windows but rests on 6: what the summary says instead of "the model
+// agrees with the run".
+Fitted leaning(const Candidate& c, double bic, double z_many) {
+  Fitted f = fitted({&c}, bic, 3.8, 1.5);
+  f.fit.rss = 5.0;
+  f.basis = {SignificanceBasis{6.1, 17.0, z_many}};
+  return f;
+}
+
+TEST(QuestionVerdict, NothingNamedSaysWhatTheRunLeansTowards) {
+  const Candidate lag = candidate("steering_lag");
+  const Candidate limit = candidate("accel_limit");
+  const std::vector<Fitted> singles = {fitted({&limit}, -20.0, 4.5, 0.8),
+                                       leaning(lag, -600.0, 8.6)};
+  const QuestionResult result = verdict_without_selection(singles);
+  EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
+  ASSERT_TRUE(result.undecided.has_value());
+  EXPECT_EQ(result.undecided->candidate.label(), "steering_lag");
+  EXPECT_DOUBLE_EQ(result.undecided->windows, 6.1);
+  EXPECT_NEAR(result.undecided->candidate.explained, 0.75, 1e-12);
+  for (const char* part :
+       {"undecided: the run leans towards steering_lag (steering_lag.k = 1 +- 0.01)",
+        "takes 75 % of what the nominal model leaves", "would be 8.6 sigma on many windows",
+        "rests on about 6.1", "widened 17 times", "on so few it is 3.8 sigma, below 5"}) {
+    EXPECT_NE(result.summary.find(part), std::string::npos) << part << "\n" << result.summary;
+  }
+  EXPECT_EQ(result.summary.find("agrees with the run"), std::string::npos) << result.summary;
+  // Left by a misfit test, the same lean follows what makes the residual unexplained.
+  const QuestionResult unexplained =
+      verdict_without_selection(singles, {misfit("jumps", 26.0, 43.0)});
+  EXPECT_EQ(unexplained.verdict, Verdict::kUnexplained);
+  EXPECT_NE(unexplained.summary.find("candidate none. Undecided: the run leans towards "
+                                     "steering_lag"),
+            std::string::npos)
+      << unexplained.summary;
+}
+
+// A lag of 0.057 +- 0.012 s where the replay resolves 0.0103 s: 3.7 sigma from nothing with
+// the sigma its few windows leave, 5.4 with the sigma many would (0.012 / sqrt(17)); within
+// 2 resolutions of nothing, not resolved on any number of windows.
+TEST(QuestionVerdict, ALeanIsJudgedAgainstTheResolutionAsOnManyWindows) {
+  const Candidate lag = candidate("steering_lag", 0.0103);
+  Fitted resolved = leaning(lag, -600.0, 8.6);
+  resolved.fit.values = {0.057};
+  resolved.fit.sigmas = {0.012};
+  EXPECT_TRUE(verdict_without_selection({resolved}).undecided.has_value());
+  Fitted unresolved = resolved;
+  unresolved.fit.values = {0.02};
+  EXPECT_FALSE(verdict_without_selection({unresolved}).undecided.has_value());
+}
+
+TEST(QuestionVerdict, NoLeanWithoutMostOfTheGapOnFewWindowsFromTheBestCandidate) {
+  const Candidate lag = candidate("steering_lag");
+  const Candidate other = candidate("actuator_lag");
+  // Half the gap, not more (the fixture's rss 10 of 20).
+  Fitted half = leaning(lag, -600.0, 8.6);
+  half.fit.rss = 10.0;
+  // As significant on many windows as on few: not the windows' doing.
+  const Fitted weak = leaning(lag, -600.0, 4.0);
+  // Large on few windows but changing the residual by a tenth of a noise sigma.
+  Fitted small = leaning(lag, -600.0, 8.6);
+  small.size = {0.1};
+  // Not the best by BIC: the best takes no lean.
+  const std::vector<Fitted> second = {fitted({&other}, -700.0, 4.0, 0.8),
+                                      leaning(lag, -600.0, 8.6)};
+  for (const std::vector<Fitted>& singles :
+       {std::vector<Fitted>{half}, std::vector<Fitted>{weak}, std::vector<Fitted>{small}, second}) {
+    const QuestionResult result = verdict_without_selection(singles);
+    EXPECT_EQ(result.verdict, Verdict::kNoSignificantGap);
+    EXPECT_FALSE(result.undecided.has_value()) << result.summary;
+    EXPECT_NE(result.summary.find("agrees with the run to within its noise"), std::string::npos)
+        << result.summary;
+  }
+}
+
 TEST(QuestionVerdict, NamedCarriesTheRefittedValuesIntoTheModel) {
   const QuestionOptions options;
   Candidate bias = candidate("gyro_bias", 0.003);
