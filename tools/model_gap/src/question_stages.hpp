@@ -77,7 +77,6 @@ class Evaluator {
   mutable std::vector<double> raw_;
 };
 
-/// One candidate (a single effect or a pair) as fitted.
 /// What an effect's significance rests on, where the residuals' correlation widened it: the
 /// windows its parameters' variance comes from (the F test's second degree of freedom) and
 /// how much that correlation widened their uncertainty along the fitted change.
@@ -87,6 +86,7 @@ struct SignificanceBasis {
   double z_many = 0.0;  ///< the same statistic against the normal (as if on many windows)
 };
 
+/// One candidate (a single effect or a pair) as fitted.
 struct Fitted {
   std::vector<const Candidate*> effects;
   FitOutcome fit;

@@ -218,7 +218,8 @@ struct QuestionResult {
   /// kRivalBic of the named one's, best first. The run barely tells them apart (on circles
   /// alone a caster's steering offset turns the body as a wheel-radius change does).
   std::vector<CandidateScore> rivals;
-  /// Nothing named or unexplained: the candidate the run leans towards, if any.
+  /// Nothing selected (no significant gap, or unexplained): the candidate the run leans
+  /// towards, if any (give_verdict()).
   std::optional<Undecided> undecided;
   double wall_time_s = 0.0;
 };
