@@ -460,8 +460,15 @@ QuestionResult analyse_question(Question question, const RobotModel& base,
   detail::measure_misfit(s, result);
   detail::attribute_gap(s, options, result);
   result.noise_findings = detail::stated_noise_findings(s.replay, s.noise, options.min_noise_ratio);
-  const detail::VerdictInputs verdict{question, &base,   &s.singles,         s.chosen,
-                                      &s.final, &s.full, s.nominal_fixed.bic};
+  const detail::VerdictInputs verdict{question,
+                                      &base,
+                                      &s.singles,
+                                      s.chosen,
+                                      &s.final,
+                                      &s.full,
+                                      s.nominal_fixed.bic,
+                                      &s.nominal_fixed,
+                                      &s.replay.window_start_s};
   detail::give_verdict(verdict, options, result);
   detail::calibrate_own_parameters(verdict, options, result);
   if (!result.noise_findings.empty()) {

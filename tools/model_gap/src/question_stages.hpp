@@ -217,6 +217,10 @@ struct VerdictInputs {
   const Fitted* final = nullptr;            ///< the selection refitted
   const std::vector<char>* full = nullptr;  ///< per single: fitted on every window (none: all)
   double nominal_bic = kInf;                ///< the nominal model's, every window
+  /// The nominal model as the singles were scored against (nuisance fixed, every window) and
+  /// the windows' start times: where an undecided candidate takes the gap. None: not said.
+  const FitOutcome* nominal = nullptr;
+  const std::vector<double>* window_start_s = nullptr;
 };
 
 /// Effect e of a fit, its parameters from `first` on (`s`: the fit's score), as reported.

@@ -54,7 +54,9 @@ json undecided_json(const std::optional<Undecided>& u) {
           {"z", number(c.z.empty() ? 0.0 : c.z[0])},
           {"z_on_many_windows", number(u->z_many)},
           {"windows", number(u->windows)},
-          {"widening", number(u->widening)}};
+          {"widening", number(u->widening)},
+          {"where_s", u->where_s},
+          {"where_share", number(u->where_share)}};
 }
 
 json question_json(const QuestionResult& q) {

@@ -6,6 +6,8 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <vector>
@@ -22,10 +24,47 @@ std::string fmt(double v, int precision = 3) {
   return s.str();
 }
 
+std::string percent(double share) { return std::to_string(std::lround(100.0 * share)) + " %"; }
+
+std::string one_decimal(double v) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1) << v;
+  return s.str();
+}
+
 // The best single candidate by BIC, fitted on every window, when it takes most of the gap
 // and would be named but for the few windows it rests on: as on many windows (its statistic
 // against the normal, its sigmas unwidened) it passes every condition of significant()
 // (question.hpp, Undecided).
+// Where `f` takes the gap against `nominal` (question.hpp, Undecided::where_s): per window
+// the drop of the whitened sum of squares over channels.
+void locate_gain(const Fitted& f, const FitOutcome& nominal, const std::vector<double>& start_s,
+                 Undecided& u) {
+  const std::size_t windows = start_s.size();
+  if (windows == 0 || f.fit.residuals.size() != nominal.residuals.size()) return;
+  std::vector<double> gain(windows, 0.0);
+  for (std::size_t i = 0; i < nominal.residuals.size(); ++i) {
+    const double before = nominal.residuals[i];
+    const double after = f.fit.residuals[i];
+    if (std::isfinite(before) && std::isfinite(after))
+      gain[i % windows] += before * before - after * after;
+  }
+  std::vector<std::size_t> order(windows);
+  std::iota(order.begin(), order.end(), 0);
+  std::ranges::sort(order, [&gain](std::size_t a, std::size_t b) { return gain[a] > gain[b]; });
+  double total = 0.0;
+  for (double g : gain) total += std::max(g, 0.0);
+  double top = 0.0;
+  std::vector<std::size_t> where;
+  for (std::size_t k = 0; k < std::min(kUndecidedWhere, windows) && gain[order[k]] > 0.0; ++k) {
+    where.push_back(order[k]);
+    top += gain[order[k]];
+  }
+  std::ranges::sort(where);
+  for (std::size_t j : where) u.where_s.push_back(start_s[j]);
+  u.where_share = total > 0.0 ? top / total : 0.0;
+}
+
 std::optional<Undecided> undecided_of(const VerdictInputs& in, const QuestionOptions& options) {
   const std::vector<std::size_t> order = singles_by_bic(*in.singles, in.full, kInf);
   if (order.empty()) return std::nullopt;
@@ -36,7 +75,12 @@ std::optional<Undecided> undecided_of(const VerdictInputs& in, const QuestionOpt
   for (double& sigma : on_many.fit.sigmas) sigma /= std::sqrt(f.basis[0].widening);
   const CandidateScore s = score_of(f);
   if (!(s.explained > kUndecidedShare) || !significant(on_many, options)) return std::nullopt;
-  return Undecided{s, f.basis[0].windows, f.basis[0].widening, f.basis[0].z_many};
+  Undecided u{s, f.basis[0].windows, f.basis[0].widening, f.basis[0].z_many, {}, 0.0};
+  const bool beside_other = f.nominal_beside.has_value() && f.nominal_beside->ok;
+  const FitOutcome* nominal = beside_other ? &*f.nominal_beside : in.nominal;
+  if (nominal != nullptr && in.window_start_s != nullptr)
+    locate_gain(f, *nominal, *in.window_start_s, u);
+  return u;
 }
 
 // "the run leans towards steering_lag (steering_lag.time_constant_s = 0.057 +- 0.012): ...".
@@ -48,8 +92,13 @@ std::string undecided_sentence(const Undecided& u, const QuestionOptions& option
               " +- " + fmt(c.sigmas[k], 2);
   }
   const double z = c.z.empty() ? 0.0 : c.z[0];
+  std::string where;
+  for (double t : u.where_s) where += (where.empty() ? "" : ", ") + one_decimal(t);
+  if (!where.empty()) {
+    where = ", " + percent(u.where_share) + " of it in the windows from " + where + " s";
+  }
   return "the run leans towards " + c.label() + " (" + values + "): it takes " +
-         fmt(100.0 * c.explained, 2) + " % of what the nominal model leaves and would be " +
+         percent(c.explained) + " of what the nominal model leaves" + where + ", and would be " +
          fmt(u.z_many, 2) + " sigma on many windows, but it rests on about " + fmt(u.windows, 2) +
          " (its variance widened " + fmt(u.widening, 3) +
          " times by the residuals' correlation), and on so few it is " + fmt(z, 2) +

@@ -223,6 +223,7 @@ QuestionReplay sensor_question_replay(const SensorReplay& sensors, const RobotMo
   QuestionReplay sq;
   sq.channels = sensors.channels();
   sq.windows = w;
+  sq.window_start_s = motion.start_s;
   sq.residuals = [&sensors](const RobotModel& model, std::span<const double> nuisance,
                             std::vector<double>& out, std::size_t window_limit) {
     return sensors.residuals(sim::resolve_plant(model), sensors.truth(nuisance), out, window_limit);
@@ -394,6 +395,7 @@ QuestionReplay command_question_replay(const CommandReplay& commands, const Sens
   QuestionReplay cq;
   cq.channels = commands.channels();
   cq.windows = w;
+  cq.window_start_s = motion.start_s;
   cq.residuals = [&commands](const RobotModel& model, std::span<const double> nuisance,
                              std::vector<double>& out, std::size_t window_limit) {
     return commands.residuals(model, nuisance.empty() ? 0.0 : nuisance[0], out, window_limit);

@@ -276,7 +276,7 @@ TEST(ReportTest, WritesJsonMarkdownPlotsAndTheAugmentedModel) {
   lag.sigmas = {0.012};
   lag.z = {3.8};
   lag.explained = 0.71;
-  leaning.command.undecided = Undecided{lag, 6.1, 16.9, 8.6};
+  leaning.command.undecided = Undecided{lag, 6.1, 16.9, 8.6, {27.2, 31.3}, 0.4};
   write_report(leaning, dir.string());
   std::ifstream again(dir / "report.json");
   const nlohmann::json u = nlohmann::json::parse(again)["questions"][1]["undecided"];
@@ -287,6 +287,8 @@ TEST(ReportTest, WritesJsonMarkdownPlotsAndTheAugmentedModel) {
   EXPECT_DOUBLE_EQ(u["z_on_many_windows"].get<double>(), 8.6);
   EXPECT_DOUBLE_EQ(u["windows"].get<double>(), 6.1);
   EXPECT_DOUBLE_EQ(u["widening"].get<double>(), 16.9);
+  EXPECT_EQ(u["where_s"].get<std::vector<double>>(), (std::vector<double>{27.2, 31.3}));
+  EXPECT_DOUBLE_EQ(u["where_share"].get<double>(), 0.4);
   // A fixed command, only asking whether gnuplot is installed.
   if (std::system("gnuplot --version > /dev/null 2>&1") == 0) {  // NOLINT(cert-env33-c)
     EXPECT_TRUE(std::filesystem::exists(dir / "trajectory.png"));

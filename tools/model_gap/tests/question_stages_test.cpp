@@ -221,6 +221,32 @@ TEST(QuestionVerdict, NothingNamedSaysWhatTheRunLeansTowards) {
       << unexplained.summary;
 }
 
+// Where a lean takes the gap: four windows (starting at 0, 1, 2, 3 s) of two channels; the
+// nominal model leaves 3, 0, 2, 4 (whitened) in the first channel and 1 everywhere in the
+// second, the candidate 1, 0, 0, 4 and 1, 1, 0, 1. Its gains per window: 8, -1, 5, 0, of which
+// the two positive carry all.
+TEST(QuestionVerdict, ALeanSaysInWhichWindowsItTakesTheGap) {
+  const Candidate lag = candidate("steering_lag");
+  std::vector<Fitted> singles = {leaning(lag, -600.0, 8.6)};
+  singles[0].fit.residuals = {1.0, 0.0, 0.0, 4.0, 1.0, 1.0, 0.0, 1.0};
+  FitOutcome nominal;
+  nominal.ok = true;
+  nominal.residuals = {3.0, 0.0, 2.0, 4.0, 1.0, 0.0, 1.0, 1.0};
+  const std::vector<double> start_s = {0.0, 1.0, 2.0, 3.0};
+  const QuestionOptions options;
+  const Fitted final;
+  const RobotModel base;
+  QuestionResult result;
+  give_verdict({Question::kCommandToMotion, &base, &singles, nullptr, &final, nullptr, 0.0,
+                &nominal, &start_s},
+               options, result);
+  ASSERT_TRUE(result.undecided.has_value());
+  EXPECT_EQ(result.undecided->where_s, (std::vector<double>{0.0, 2.0}));
+  EXPECT_DOUBLE_EQ(result.undecided->where_share, 1.0);
+  EXPECT_NE(result.summary.find("100 % of it in the windows from 0.0, 2.0 s"), std::string::npos)
+      << result.summary;
+}
+
 // A lag of 0.057 +- 0.012 s where the replay resolves 0.0103 s: 3.7 sigma from nothing with
 // the sigma its few windows leave, 5.4 with the sigma many would (0.012 / sqrt(17)); within
 // 2 resolutions of nothing, not resolved on any number of windows.

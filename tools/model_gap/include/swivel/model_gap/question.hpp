@@ -116,6 +116,7 @@ struct QuestionReplay {
   std::vector<std::vector<double>> wheel_sin_change;
   std::vector<std::vector<double>> wheel_cos_change;
   std::vector<std::vector<double>> slowest_roll_offsets;  ///< MisfitInputs's
+  std::vector<double> window_start_s;  ///< per window: its first row's time (for the report)
 };
 
 /// Parameters of one named effect as fitted, in the model's units.
@@ -188,7 +189,14 @@ struct Undecided {
   double windows = 0.0;   ///< the windows its significance rests on
   double widening = 1.0;  ///< how much the residuals' correlation widened its variance
   double z_many = 0.0;    ///< its statistic against the normal, as on many windows
+  /// Where it takes the gap: the start times of the (at most kUndecidedWhere) windows whose
+  /// whitened sum of squares it lowers most, earliest first, and their share of all it lowers.
+  std::vector<double> where_s{};
+  double where_share = 0.0;
 };
+
+/// How many windows an undecided verdict points at.
+inline constexpr std::size_t kUndecidedWhere = 3;
 
 /// Share of the nominal model's whitened sum of squares above which a candidate that is not
 /// named is reported as undecided. On clean runs the best candidate takes a few per cent at
