@@ -224,6 +224,11 @@ TEST(BenchStatistics, CoverageOutsideItsBandIsMissed) {
 // Library runs whose geometry the motion does not show the size of are counted apart, on the
 // only question they can answer: whether anything was named that the run does not hide. The
 // judged figure still counts every library run.
+void expect_proportion(const validation::Proportion& p, std::size_t hits, std::size_t n) {
+  EXPECT_EQ(p.hits, hits);
+  EXPECT_EQ(p.n, n);
+}
+
 TEST(BenchStatistics, FrictionLimitedGeometryIsCountedApartAndNotJudged) {
   std::vector<battery::CaseOutcome> runs;
   runs.push_back(library(true, {}));
@@ -243,12 +248,9 @@ TEST(BenchStatistics, FrictionLimitedGeometryIsCountedApartAndNotJudged) {
   broken.error = "the workflow threw";
   runs.push_back(broken);
   const validation::SetFigures f = validation::figures(runs);
-  EXPECT_EQ(f.named_right.n, 6U);
-  EXPECT_EQ(f.named_right.hits, 1U);
-  EXPECT_EQ(f.named_right_size_in_motion.n, 2U);
-  EXPECT_EQ(f.named_right_size_in_motion.hits, 1U);
-  EXPECT_EQ(f.friction_limited_no_wrong_name.n, 4U);
-  EXPECT_EQ(f.friction_limited_no_wrong_name.hits, 2U);
+  expect_proportion(f.named_right, 1, 6);
+  expect_proportion(f.named_right_size_in_motion, 1, 2);
+  expect_proportion(f.friction_limited_no_wrong_name, 2, 4);
 }
 
 // Undecided verdicts: on clean runs in either question; on library questions that hide an
@@ -275,12 +277,9 @@ TEST(BenchStatistics, UndecidedVerdictsAreCountedByWhatTheyLeanTowards) {
   outside.undecided[0] = "slip";
   runs.push_back(outside);
   const validation::SetFigures f = validation::figures(runs);
-  EXPECT_EQ(f.clean_undecided.n, 2U);
-  EXPECT_EQ(f.clean_undecided.hits, 1U);
-  EXPECT_EQ(f.missed_undecided_hidden.n, 2U);
-  EXPECT_EQ(f.missed_undecided_hidden.hits, 1U);
-  EXPECT_EQ(f.undecided_not_hidden.n, 3U);
-  EXPECT_EQ(f.undecided_not_hidden.hits, 2U);
+  expect_proportion(f.clean_undecided, 1, 2);
+  expect_proportion(f.missed_undecided_hidden, 1, 2);
+  expect_proportion(f.undecided_not_hidden, 2, 3);
 }
 
 // Repeats of one run: the estimates of a scale scatter by 0.001 about 1.02 while the reported
