@@ -308,6 +308,10 @@ Fitted run_fit(const QuestionState& s, std::vector<const Candidate*> effects,
   return f;
 }
 
+const FitOutcome* nominal_beside_of(const Fitted& f) {
+  return f.nominal_beside.has_value() && f.nominal_beside->ok ? &*f.nominal_beside : nullptr;
+}
+
 Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<double>& initial,
                   const FitOutcome& reference, const QuestionOptions& options) {
   Fitted f = run_fit(s, {&c}, initial, options);
@@ -316,8 +320,8 @@ Fitted single_fit(const QuestionState& s, const Candidate& c, const std::vector<
   // Against the nominal model at the same nuisance: where the nominal model's command delay
   // ran to its bound standing in for a lag, the lag fitted without it changes the replay by
   // what the delay had taken up.
-  const bool beside_other = f.nominal_beside.has_value() && f.nominal_beside->ok;
-  f.size = {contribution(f.fit, beside_other ? *f.nominal_beside : reference, s.windows)};
+  const FitOutcome* beside = nominal_beside_of(f);
+  f.size = {contribution(f.fit, beside != nullptr ? *beside : reference, s.windows)};
   f.rss_reference = reference.rss;
   f.bic_reference = reference.bic;
   return f;

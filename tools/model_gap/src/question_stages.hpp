@@ -147,6 +147,9 @@ double added_z(const FitOutcome& with, std::size_t first, std::size_t count, dou
 FitOutcome effects_part(FitOutcome joint, std::size_t p);
 std::size_t param_count(const std::vector<const Candidate*>& effects);
 CandidateScore score_of(const Fitted& f);
+/// The nominal model a single was fitted beside where that is not the question's
+/// (Fitted::nominal_beside, when it could be scored); else nullptr.
+const FitOutcome* nominal_beside_of(const Fitted& f);
 /// Per row (channel-major), the noise sigma of the replay's windows.
 std::vector<double> row_sigma(const NoiseModel& noise, const QuestionReplay& replay);
 MisfitInputs misfit_inputs(const QuestionReplay& replay, const std::vector<double>& residuals,

@@ -32,10 +32,6 @@ std::string one_decimal(double v) {
   return s.str();
 }
 
-// The best single candidate by BIC, fitted on every window, when it takes most of the gap
-// and would be named but for the few windows it rests on: as on many windows (its statistic
-// against the normal, its sigmas unwidened) it passes every condition of significant()
-// (question.hpp, Undecided).
 // Where `f` takes the gap against `nominal` (question.hpp, Undecided::where_s): per window
 // the drop of the whitened sum of squares over channels.
 void locate_gain(const Fitted& f, const FitOutcome& nominal, const std::vector<double>& start_s,
@@ -65,6 +61,10 @@ void locate_gain(const Fitted& f, const FitOutcome& nominal, const std::vector<d
   u.where_share = total > 0.0 ? top / total : 0.0;
 }
 
+// The best single candidate by BIC, fitted on every window, when it takes most of the gap
+// and would be named but for the few windows it rests on: as on many windows (its statistic
+// against the normal, its sigmas unwidened) it passes every condition of significant()
+// (question.hpp, Undecided).
 std::optional<Undecided> undecided_of(const VerdictInputs& in, const QuestionOptions& options) {
   const std::vector<std::size_t> order = singles_by_bic(*in.singles, in.full, kInf);
   if (order.empty()) return std::nullopt;
@@ -76,8 +76,8 @@ std::optional<Undecided> undecided_of(const VerdictInputs& in, const QuestionOpt
   const CandidateScore s = score_of(f);
   if (!(s.explained > kUndecidedShare) || !significant(on_many, options)) return std::nullopt;
   Undecided u{s, f.basis[0].windows, f.basis[0].widening, f.basis[0].z_many, {}, 0.0};
-  const bool beside_other = f.nominal_beside.has_value() && f.nominal_beside->ok;
-  const FitOutcome* nominal = beside_other ? &*f.nominal_beside : in.nominal;
+  const FitOutcome* beside = nominal_beside_of(f);
+  const FitOutcome* nominal = beside != nullptr ? beside : in.nominal;
   if (nominal != nullptr && in.window_start_s != nullptr)
     locate_gain(f, *nominal, *in.window_start_s, u);
   return u;
