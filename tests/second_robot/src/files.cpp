@@ -132,6 +132,37 @@ std::string run_log_text(const RunSpec& spec, const std::vector<Row>& rows) {
   return out;
 }
 
+std::string hidden_state_text(const RunSpec& spec, const std::vector<Row>& rows) {
+  const Design d = design(spec.design);
+  const bool swpc = d.drive == Drive::kSwpc;
+  const std::size_t n = d.wheel_count();
+  std::string out =
+      "# swivel-second-run hidden state: the generator's truth at each row of the run log, "
+      "seed " +
+      std::to_string(spec.seed) +
+      "\n# body twist in the body frame; servo error: reference minus "
+      "true steering angle\n";
+  out += "t,x,y,yaw,vx,vy,wz";
+  for (std::size_t i = 1; i <= n; ++i) out += ",true_wheel_" + std::to_string(i);
+  for (std::size_t i = 1; i <= n; ++i) out += ",contact_speed_" + std::to_string(i);
+  if (swpc) {
+    for (std::size_t i = 1; i <= n; ++i) out += ",true_steer_" + std::to_string(i);
+    for (std::size_t i = 1; i <= n; ++i) out += ",servo_error_" + std::to_string(i);
+  }
+  out += "\n";
+  for (const Row& r : rows) {
+    out += number(r.t_s);
+    for (double v : r.pose) out += "," + number(v);
+    for (double v : r.twist) out += "," + number(v);
+    for (double v : r.true_wheel_rad) out += "," + number(v);
+    for (double v : r.contact_speed_mps) out += "," + number(v);
+    for (double v : r.true_steer_rad) out += "," + number(v);
+    for (double v : r.steering_servo_error_rad) out += "," + number(v);
+    out += "\n";
+  }
+  return out;
+}
+
 std::string model_text(const RunSpec& spec) {
   const Design d = design(spec.design);
   const bool swpc = d.drive == Drive::kSwpc;
@@ -178,7 +209,8 @@ std::string model_text(const RunSpec& spec) {
 
 GeneratedRun generate(const RunSpec& spec) {
   const std::vector<Row> rows = simulate(spec);
-  return {run_log_text(spec, rows), model_text(spec), expected_effects(spec)};
+  return {run_log_text(spec, rows), model_text(spec), expected_effects(spec),
+          hidden_state_text(spec, rows)};
 }
 
 namespace {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # swivel-second-run's options with --case: --no-noise and --true change the case (and say so),
-# and an option the case fixes itself (--rate, --robot, ...) is a usage error, not ignored.
+# an option the case fixes itself (--rate, --robot, ...) is a usage error, not ignored, and
+# --hidden-out writes the generator's state row for row.
 # Usage: run_options_test.sh SWIVEL_SECOND_RUN
 set -euo pipefail
 tool=$1
@@ -25,6 +26,14 @@ for option in "--rate 30" "--robot trike3" "--script circles" "--duration 20" "-
   [[ $rc -eq 2 ]] || fail "$option with --case: exit $rc, expected 2 (usage error)"
   grep -q -- '--case' "$work/err.txt" || fail "$option with --case: the error does not name --case"
 done
+
+# --hidden-out writes the generator's own state beside the log, one line per row.
+"$tool" "${case_args[@]}" --out "$work/run.csv" --hidden-out "$work/hidden.csv" >"$work/h.txt"
+grep -q '^t,x,y,yaw,vx,vy,wz,' "$work/hidden.csv" || fail "--hidden-out: no header of the state"
+rows=$(grep -vc '^#' "$work/run.csv")
+hidden=$(grep -vc '^#' "$work/hidden.csv")
+[[ $rows -eq $hidden ]] || fail "--hidden-out: $hidden lines against the log's $rows"
+grep -q "wrote $work/hidden.csv" "$work/h.txt" || fail "--hidden-out: not reported"
 
 rc=0
 "$tool" --index 3 --out "$work/x.csv" >/dev/null 2>&1 || rc=$?

@@ -87,6 +87,49 @@ TEST(SecondRobotFiles, ReadBackWithTheProjectsReaders) {
   }
 }
 
+// The hidden state is the simulation's own truth, row for row, with a column for each
+// quantity and wheel (caster angles and servo errors only on swpc).
+TEST(SecondRobotFiles, HiddenStateIsTheTruthOfEachRow) {
+  for (const char* name : {"trike3", "mini_diff"}) {
+    const RunSpec spec = short_run(name, 50, 11);
+    const std::vector<Row> rows = simulate(spec);
+    std::istringstream text(generate(spec).hidden_csv);
+    std::string line;
+    std::vector<std::vector<double>> table;
+    std::vector<std::string> header;
+    while (std::getline(text, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream cells(line);
+      std::string cell;
+      std::vector<std::string> fields;
+      while (std::getline(cells, cell, ',')) fields.push_back(cell);
+      if (header.empty()) {
+        header = fields;
+        continue;
+      }
+      std::vector<double> values;
+      values.reserve(fields.size());
+      for (const std::string& f : fields) values.push_back(std::stod(f));
+      table.push_back(values);
+    }
+    const std::size_t n = design(name).wheel_count();
+    const bool swpc = design(name).drive == Drive::kSwpc;
+    ASSERT_EQ(header.size(), 7 + 2 * n + (swpc ? 2 * n : 0)) << name;
+    EXPECT_EQ(header[4], "vx");
+    EXPECT_EQ(header[7], "true_wheel_1");
+    ASSERT_EQ(table.size(), rows.size()) << name;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      ASSERT_EQ(table[k].size(), header.size()) << name << " row " << k;
+      EXPECT_EQ(table[k][0], rows[k].t_s);
+      EXPECT_EQ(table[k][6], rows[k].twist[2]);
+      EXPECT_EQ(table[k][7 + n], rows[k].contact_speed_mps[0]);
+      if (swpc) {
+        EXPECT_EQ(header[7 + 3 * n], "servo_error_1");
+        EXPECT_EQ(table[k][7 + 3 * n + n - 1], rows[k].steering_servo_error_rad[n - 1]);
+      }
+    }
+  }
+}
 TEST(SecondRobotFiles, ModelWithoutLimitsAndFractionalCounts) {
   RunSpec spec = short_run("hex6", 50, 3);
   spec.model.accel_limits = false;

@@ -88,6 +88,11 @@ int run(int argc, char** argv) {
       ->excludes(case_option);
   app.add_option("--out", out, "run log (CSV)")->required();
   app.add_option("--model-out", model_out, "nominal model (YAML)");
+  std::string hidden_out;
+  app.add_option("--hidden-out", hidden_out,
+                 "the generator's own state at each row, which the log does not show (CSV: "
+                 "true pose and body twist, wheel angles and contact speeds, caster angles and "
+                 "servo errors): for tracing what a finding is due to");
   if (const auto exit = swivel::cli::parse(app, argc, argv, "swivel-second-run")) return *exit;
 
   RunSpec spec;
@@ -144,6 +149,10 @@ int run(int argc, char** argv) {
     if (!model_out.empty()) {
       if (!write(model_out, run.nominal_model_yaml)) return 1;
       std::printf("wrote %s: the nominal model\n", model_out.c_str());
+    }
+    if (!hidden_out.empty()) {
+      if (!write(hidden_out, run.hidden_csv)) return 1;
+      std::printf("wrote %s: the generator's hidden state\n", hidden_out.c_str());
     }
     std::printf("expected: %s\n", expected_text(run.expected).c_str());
     if (const auto f = geometry_footprint(spec)) {

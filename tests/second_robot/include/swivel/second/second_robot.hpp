@@ -135,6 +135,10 @@ struct GeneratedRun {
   std::string run_csv;
   std::string nominal_model_yaml;
   std::vector<ExpectedEffect> expected;
+  /// The generator's own state at each row, which the run log does not show (a CSV: t, the
+  /// true pose and body twist, each wheel's true angle and contact speed, and on swpc each
+  /// caster's true steering angle and servo error): for tracing what a finding is due to.
+  std::string hidden_csv;
 };
 
 /// Simulates and writes both files. Deterministic per spec.
