@@ -171,10 +171,12 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
   ASSERT_EQ(got.modules.size(), 4U);
   EXPECT_EQ(got.name, robot);
 
-  // x, y, d: reported 1-sigma about 0.05 mm (0.3 mm motion-capture noise), so 0.25 mm is
-  // about 5 sigma and below most design-value errors (0.2-2 mm; seen: at most 0.17 mm).
-  // delta: 1-sigma about 0.15 degrees (1 mrad yaw noise), 0.5 degrees is over 3 sigma and
-  // below the offsets to find (0.6-1.5 degrees; seen: at most 0.25 degrees).
+  // x, y, d: reported 1-sigma 0.012-0.015 mm (0.3 mm motion-capture noise); 0.25 mm is
+  // below most design-value errors (0.2-2 mm; seen: at most 0.17 mm). delta: reported
+  // 1-sigma 0.039-0.044 degrees (1 mrad yaw noise); 0.5 degrees is below the offsets to find
+  // (0.6-1.5 degrees; seen: at most 0.25 degrees). Both bounds are far outside the noise:
+  // they catch a wrong calibration, not an unlucky one. The sigmas hold: seen on three runs,
+  // 12 steering offsets at 0.2-2.4 of their sigmas (rms 1.0), 36 of x, y, d at 0-2.2 (rms 1.0).
   // Radii: the free wheels are torque-driven (the plugin's default, as in the paper) and roll
   // without slipping, so each module's r is found to noise level (seen: within 0.01 mm);
   // 0.1 mm is well below the design-value errors to find (0.4-1 mm).
@@ -226,7 +228,8 @@ TEST(SwiveldCalibration, SwivelctlCalibrateRecoversTheSimulatedRobotsTrueModel) 
               calibrated_m, nominal_deg, calibrated_deg);
   // Better than the design values, by how much the calibration's noise decides. Seen: about
   // -78 % and -79 % most runs; -12 to -23 % on two of them, whose steering offsets came out
-  // 0.08-0.12 degrees off (2-3 of their reported sigmas), within the 0.5 degrees asked above;
+  // 0.08-0.12 degrees off (2-3 of their reported sigmas of about 0.04 degrees: among several
+  // runs of four offsets each, one that far is expected), within the 0.5 degrees asked above;
   // with 90-degree runs, which left the offsets 0.1-0.3 degrees off, the error doubled instead.
   // A bar at -25 % failed those two runs of a sound calibration.
   EXPECT_LT(calibrated_m, nominal_m);
