@@ -136,12 +136,9 @@ std::string hidden_state_text(const RunSpec& spec, const std::vector<Row>& rows)
   const Design d = design(spec.design);
   const bool swpc = d.drive == Drive::kSwpc;
   const std::size_t n = d.wheel_count();
-  std::string out =
-      "# swivel-second-run hidden state: the generator's truth at each row of the run log, "
-      "seed " +
-      std::to_string(spec.seed) +
-      "\n# body twist in the body frame; servo error: reference minus "
-      "true steering angle\n";
+  std::string out = "# swivel-second-run hidden state, seed " + std::to_string(spec.seed) +
+                    ": the generator's truth at each row of the run log\n";
+  out += "# body twist in the body frame; servo error: reference minus true steering angle\n";
   out += "t,x,y,yaw,vx,vy,wz";
   for (std::size_t i = 1; i <= n; ++i) out += ",true_wheel_" + std::to_string(i);
   for (std::size_t i = 1; i <= n; ++i) out += ",contact_speed_" + std::to_string(i);
