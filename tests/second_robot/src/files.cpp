@@ -92,6 +92,17 @@ std::vector<ExpectedEffect> expected_effects(const RunSpec& spec) {
 
 namespace {
 
+// CSV columns `name`1 .. `name`n, each after a comma.
+void append_numbered(std::string& out, const std::string& name, std::size_t n) {
+  for (std::size_t i = 1; i <= n; ++i) out += "," + name + std::to_string(i);
+}
+
+// Each value after a comma.
+template <typename Values>
+void append_values(std::string& out, const Values& values) {
+  for (double v : values) out += "," + number(v);
+}
+
 std::string run_log_text(const RunSpec& spec, const std::vector<Row>& rows) {
   const Design d = design(spec.design);
   const bool swpc = d.drive == Drive::kSwpc;
@@ -110,20 +121,20 @@ std::string run_log_text(const RunSpec& spec, const std::vector<Row>& rows) {
   }
   out += "t,cmd_vx,cmd_vy,cmd_wz";
   if (swpc) {
-    for (std::size_t i = 1; i <= n; ++i) out += ",steer_" + std::to_string(i);
-    for (std::size_t i = 1; i <= n; ++i) out += ",wheel_" + std::to_string(i);
+    append_numbered(out, "steer_", n);
+    append_numbered(out, "wheel_", n);
   } else {
     out += ",wheel_l,wheel_r";
   }
   out += ",gyro_wz,truth_x,truth_y,truth_yaw\n";
   for (const Row& r : rows) {
     out += number(r.t_s);
-    for (double c : r.cmd) out += "," + number(c);
-    for (double v : r.steer_rad) out += "," + number(v);
-    for (double v : r.wheel_rad) out += "," + number(v);
+    append_values(out, r.cmd);
+    append_values(out, r.steer_rad);
+    append_values(out, r.wheel_rad);
     out += "," + number(r.gyro_radps);
     if (r.has_mocap) {
-      for (double v : r.mocap) out += "," + number(v);
+      append_values(out, r.mocap);
     } else {
       out += ",,,";
     }
@@ -140,21 +151,21 @@ std::string hidden_state_text(const RunSpec& spec, const std::vector<Row>& rows)
                     ": the generator's truth at each row of the run log\n";
   out += "# body twist in the body frame; servo error: reference minus true steering angle\n";
   out += "t,x,y,yaw,vx,vy,wz";
-  for (std::size_t i = 1; i <= n; ++i) out += ",true_wheel_" + std::to_string(i);
-  for (std::size_t i = 1; i <= n; ++i) out += ",contact_speed_" + std::to_string(i);
+  append_numbered(out, "true_wheel_", n);
+  append_numbered(out, "contact_speed_", n);
   if (swpc) {
-    for (std::size_t i = 1; i <= n; ++i) out += ",true_steer_" + std::to_string(i);
-    for (std::size_t i = 1; i <= n; ++i) out += ",servo_error_" + std::to_string(i);
+    append_numbered(out, "true_steer_", n);
+    append_numbered(out, "servo_error_", n);
   }
   out += "\n";
   for (const Row& r : rows) {
     out += number(r.t_s);
-    for (double v : r.pose) out += "," + number(v);
-    for (double v : r.twist) out += "," + number(v);
-    for (double v : r.true_wheel_rad) out += "," + number(v);
-    for (double v : r.contact_speed_mps) out += "," + number(v);
-    for (double v : r.true_steer_rad) out += "," + number(v);
-    for (double v : r.steering_servo_error_rad) out += "," + number(v);
+    append_values(out, r.pose);
+    append_values(out, r.twist);
+    append_values(out, r.true_wheel_rad);
+    append_values(out, r.contact_speed_mps);
+    append_values(out, r.true_steer_rad);
+    append_values(out, r.steering_servo_error_rad);
     out += "\n";
   }
   return out;
