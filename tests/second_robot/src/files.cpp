@@ -218,7 +218,7 @@ std::string model_text(const RunSpec& spec) {
 GeneratedRun generate(const RunSpec& spec) {
   const std::vector<Row> rows = simulate(spec);
   return {run_log_text(spec, rows), model_text(spec), expected_effects(spec),
-          hidden_state_text(spec, rows)};
+          hidden_state_text(spec, rows), largest_driving_servo_error_rad(rows)};
 }
 
 namespace {

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # swivel-second-run's options with --case: --no-noise and --true change the case (and say so),
-# an option the case fixes itself (--rate, --robot, ...) is a usage error, not ignored, and
-# --hidden-out writes the generator's state row for row.
+# an option the case fixes itself (--rate, --robot, ...) is a usage error, not ignored,
+# --hidden-out writes the generator's state row for row, and a caster run says how hard its
+# steering servos press against their tyres.
 # Usage: run_options_test.sh SWIVEL_SECOND_RUN
 set -euo pipefail
 tool=$1
@@ -34,6 +35,13 @@ rows=$(grep -vc '^#' "$work/run.csv")
 hidden=$(grep -vc '^#' "$work/hidden.csv")
 [[ $rows -eq $hidden ]] || fail "--hidden-out: $hidden lines against the log's $rows"
 grep -q "wrote $work/hidden.csv" "$work/h.txt" || fail "--hidden-out: not reported"
+
+# A caster robot's run says how hard its steering servos press against their tyres; a
+# differential robot's (smoke clean index 3: mini_diff) says nothing of servos.
+"$tool" --case clean --index 0 --seeds smoke --out "$work/x.csv" >"$work/caster.txt"
+grep -Eq '^steering servos while driving: largest median error [0-9.]+ mrad \(not fighting their tyres\)$' \
+  "$work/caster.txt" || fail "a clean caster run: no line on its steering servos"
+grep -q 'steering servos' "$work/noisy.txt" && fail "a differential run speaks of steering servos"
 
 rc=0
 "$tool" --index 3 --out "$work/x.csv" >/dev/null 2>&1 || rc=$?

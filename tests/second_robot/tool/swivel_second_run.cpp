@@ -155,6 +155,13 @@ int run(int argc, char** argv) {
       std::printf("wrote %s: the generator's hidden state\n", hidden_out.c_str());
     }
     std::printf("expected: %s\n", expected_text(run.expected).c_str());
+    if (design(spec.design).drive == Drive::kSwpc) {
+      std::printf("steering servos while driving: largest median error %.1f mrad (%s)\n",
+                  run.driving_servo_error_rad * 1e3,
+                  run.driving_servo_error_rad >= kFightingServoErrorRad
+                      ? "fighting their tyres"
+                      : "not fighting their tyres");
+    }
     if (const auto f = geometry_footprint(spec)) {
       std::printf(
           "geometry footprint: the body moves %.3g per metre apart from the nominal geometry's, "
