@@ -120,6 +120,10 @@ void print_runs(const std::vector<CaseOutcome>& outcomes) {
     }
     if (!o.size_in_motion.value_or(true))
       std::printf("    friction-limited geometry: its size is not in the body's motion\n");
+    if (o.kind == RunKind::kLibrary && o.servos_fighting.value_or(false)) {
+      std::printf("    servos fighting their tyres: largest median servo error %.1f mrad\n",
+                  o.driving_servo_error_rad.value_or(0.0) * 1e3);
+    }
     for (const auto& p : o.params) {
       std::printf("    %s.%s: truth %.6g, fitted %.6g +- %.2g (%.1f sigma)\n", p.effect.c_str(),
                   p.key.c_str(), p.truth, p.value, p.sigma, p.deviation());
@@ -171,7 +175,7 @@ void print_friction_limited_split(const validation::SetFigures& f) {
 
 // The figures the targets are set on, for each drivetrain on its own: the replays are
 // kinematic, and caster robots (steering servos, scrub while casters turn) are where they
-// fall short.
+// fall short; their runs named right are split by whether the servos fight their tyres.
 void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
   for (const bool swpc : {false, true}) {
     std::vector<CaseOutcome> part;
@@ -183,6 +187,10 @@ void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
     print_figure("false alarms, either question (clean runs)", f.false_alarm);
     print_figure("in-library effects named right, within 3 sigma", f.named_right);
     print_friction_limited_split(f);
+    if (f.named_right_servos_fighting.n + f.named_right_servos_not_fighting.n > 0) {
+      print_figure("  servos fighting their tyres: named right", f.named_right_servos_fighting);
+      print_figure("  servos not fighting: named right", f.named_right_servos_not_fighting);
+    }
     print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);
     print_figure("coverage: hidden parameters within 3 sigma", f.within_3_sigma);
   }
@@ -310,6 +318,11 @@ std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCas
            if (kind == RunKind::kLibrary) {
              if (const auto footprint = swivel::second::geometry_footprint(c.spec))
                o.size_in_motion = footprint->size_in_motion();
+           }
+           if (swivel::second::design(c.spec.design).drive == swivel::second::Drive::kSwpc) {
+             o.driving_servo_error_rad = run.driving_servo_error_rad;
+             o.servos_fighting =
+                 run.driving_servo_error_rad >= swivel::second::kFightingServoErrorRad;
            }
            const bool mounted = c.spec.truth.marker_x_m != 0.0 || c.spec.truth.marker_y_m != 0.0 ||
                                 c.spec.truth.marker_yaw_rad != 0.0;

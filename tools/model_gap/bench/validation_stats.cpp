@@ -126,6 +126,10 @@ SetFigures figures(const std::vector<battery::CaseOutcome>& outcomes) {
         } else {
           f.friction_limited_no_wrong_name.add(names_only_hidden(o));
         }
+        if (o.servos_fighting.has_value()) {
+          (*o.servos_fighting ? f.named_right_servos_fighting : f.named_right_servos_not_fighting)
+              .add(o.correct && o.values_within_3_sigma);
+        }
         for (const auto& p : o.params) {
           if (!p.observable()) continue;
           f.within_1_sigma.add(p.deviation() <= 1.0);

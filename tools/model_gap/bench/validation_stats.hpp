@@ -70,6 +70,10 @@ struct SetFigures {
   /// which only "no name that was not hidden" can be asked.
   Proportion named_right_size_in_motion;
   Proportion friction_limited_no_wrong_name;
+  /// named_right over the library runs with CaseOutcome::servos_fighting set (caster robots of
+  /// the second generator), split by it: the replays are kinematic and slide no tyre.
+  Proportion named_right_servos_fighting;
+  Proportion named_right_servos_not_fighting;
   Proportion outside_right;  ///< outside runs: the case's rule holds
   /// Undecided verdicts (question.hpp): clean runs with one in either question; library
   /// questions that hide an effect and named nothing, whose undecided is that effect; and

@@ -253,6 +253,29 @@ TEST(BenchStatistics, FrictionLimitedGeometryIsCountedApartAndNotJudged) {
   expect_proportion(f.friction_limited_no_wrong_name, 2, 4);
 }
 
+// Caster runs named right are counted apart by whether their servos fight their tyres; runs
+// that do not say (differential robots, the independent battery) are in neither part.
+TEST(BenchStatistics, CasterRunsNamedRightAreSplitByWhetherTheirServosFight) {
+  std::vector<battery::CaseOutcome> runs;
+  for (const bool right : {true, false, false}) {
+    runs.push_back(library(right, {}));
+    runs.back().servos_fighting = true;
+  }
+  for (const bool right : {true, true, false}) {
+    runs.push_back(library(right, {}));
+    runs.back().servos_fighting = false;
+  }
+  runs.push_back(library(true, {}));  // a differential robot: no servos to fight
+  battery::CaseOutcome clean_fighting = library(true, {});
+  clean_fighting.kind = battery::RunKind::kClean;
+  clean_fighting.servos_fighting = true;
+  runs.push_back(clean_fighting);
+  const validation::SetFigures f = validation::figures(runs);
+  expect_proportion(f.named_right, 4, 7);
+  expect_proportion(f.named_right_servos_fighting, 1, 3);
+  expect_proportion(f.named_right_servos_not_fighting, 2, 3);
+}
+
 // Undecided verdicts: on clean runs in either question; on library questions that hide an
 // effect and named nothing, whether the run leans towards that effect; and among all the
 // undecided of library and outside runs, those leaning to an effect not hidden there.

@@ -90,6 +90,11 @@ struct CaseOutcome {
   /// Library runs of the second generator whose hidden effect is drivetrain geometry: whether
   /// the body's motion carries its size (swivel::second::GeometryFootprint); unset otherwise.
   std::optional<bool> size_in_motion;
+  /// Caster runs of the second generator: the largest caster's median servo error while the
+  /// robot drives (swivel::second::driving_servo_errors_rad()), and whether its servos fight
+  /// their tyres (swivel::second::kFightingServoErrorRad); unset otherwise.
+  std::optional<double> driving_servo_error_rad;
+  std::optional<bool> servos_fighting;
 };
 
 /// Scores `result` against what was hidden. `allowed_outside`: effects an outside case may
