@@ -56,6 +56,7 @@ World::World(const RobotModel& true_model, const SimOptions& options)
     throw std::invalid_argument(
         "non-systematic errors: standard deviations must be >= 0 and the correlation time > 0");
   }
+  validate_caster_forces(options_.caster_forces);
   if (!(plant_.sensors.motion_capture.rate_hz > 0.0)) {
     throw std::invalid_argument("motion capture rate must be positive");
   }
@@ -66,6 +67,7 @@ World::World(const RobotModel& true_model, const SimOptions& options)
   for (std::size_t i = 0; i < n_; ++i) {
     if (plant_.drivetrain == DrivetrainKind::kSwpc) {
       modules_[i].phi_rad = options_.initial_steer_rad[i];
+      modules_[i].servo_ref_rad = options_.initial_steer_rad[i];
     }
   }
   sensor_rng_.seed(mix_seed(options_.seed));
@@ -148,6 +150,10 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     const NonSystematicErrors& ns = options_.nonsystematic;
     const double decay = std::exp(-h / ns.correlation_time_s);
     const double drive = std::sqrt(std::max(0.0, 1.0 - decay * decay));
+    bool all_velocity = true;
+    for (std::size_t i = 0; i < n_; ++i)
+      all_velocity = all_velocity && command.mode[i] == ModuleDriveMode::kVelocity;
+    const bool forces = swpc && all_velocity && options_.caster_forces.steering_yield_rad > 0.0;
 
     std::array<double, kMaxModules> ground{};
     for (std::size_t i = 0; i < n_; ++i) {
@@ -163,7 +169,8 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       }
       m.wheel_rate_radps += follow * (command.wheel_rate_radps[i] - m.wheel_rate_radps);
       if (mode == ModuleDriveMode::kVelocity) {
-        m.steer_rate_radps += follow_steer * (command.steer_rate_radps[i] - m.steer_rate_radps);
+        double& rate = forces ? m.servo_rate_radps : m.steer_rate_radps;
+        rate += follow_steer * (command.steer_rate_radps[i] - rate);
       }
       const double accel = (m.wheel_rate_radps - before) / h;
       double g =
@@ -175,11 +182,12 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
       ground[i] = g;
     }
 
-    bool all_velocity = true;
-    for (std::size_t i = 0; i < n_; ++i)
-      all_velocity = all_velocity && command.mode[i] == ModuleDriveMode::kVelocity;
     Twist2 t;
-    if (!options_.move_body && all_velocity) {
+    if (forces) {
+      // The casters turn as the body's motion lets them: it is needed even where the body
+      // does not move.
+      t = caster_force_twist(h, ground.data());
+    } else if (!options_.move_body && all_velocity) {
       // Actuators only: the body stays where it is.
     } else if (swpc) {
       t = swpc_twist(command, ground.data());
@@ -216,7 +224,13 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     // which it rolls without slipping (contact point's speed along the wheel over the radius).
     std::array<double, kMaxModules> encoder_rate{};
     for (std::size_t i = 0; i < n_; ++i) encoder_rate[i] = modules_[i].wheel_rate_radps;
-    if (swpc) {
+    if (forces) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        ModuleState& m = modules_[i];
+        m.phi_rad += m.steer_rate_radps * h;
+        m.servo_ref_rad += m.servo_rate_radps * h;
+      }
+    } else if (swpc) {
       for (std::size_t i = 0; i < n_; ++i) {
         ModuleState& m = modules_[i];
         const ModuleDriveMode mode = command.mode[i];
@@ -263,6 +277,32 @@ void World::substep(double h, const ActuatorCommand& command) noexcept {
     mocap_next_index_ =
         static_cast<std::uint64_t>(std::floor((t_s_ + kTimeEpsS) / mocap_period_s_)) + 1;
   }
+}
+
+Twist2 World::caster_force_twist(double h, const double* ground) noexcept {
+  std::array<CasterState, kMaxModules> casters{};
+  std::array<double, kMaxModules> rates{};
+  // Started where the last two sub-steps' motion leads (it changes smoothly between them).
+  for (std::size_t i = 0; i < n_; ++i) {
+    const ModuleState& m = modules_[i];
+    casters[i] = CasterState{m.phi_rad, m.servo_ref_rad, m.servo_rate_radps, ground[i]};
+    rates[i] = 2.0 * m.steer_rate_radps - m.previous_steer_rate_radps;
+  }
+  Twist2 t{2.0 * twist_.vx_mps - previous_twist_.vx_mps,
+           2.0 * twist_.vy_mps - previous_twist_.vy_mps,
+           2.0 * twist_.wz_radps - previous_twist_.wz_radps};
+  if (!caster_force_step(options_.caster_forces,
+                         std::span<const SwpcModuleParams>(plant_.modules.data(), n_),
+                         std::span<const CasterState>(casters.data(), n_), h, twist_, t,
+                         std::span<double>(rates.data(), n_))) {
+    ++caster_force_failures_;
+  }
+  previous_twist_ = twist_;
+  for (std::size_t i = 0; i < n_; ++i) {
+    modules_[i].previous_steer_rate_radps = modules_[i].steer_rate_radps;
+    modules_[i].steer_rate_radps = rates[i];
+  }
+  return t;
 }
 
 Twist2 World::swpc_twist(const ActuatorCommand& command, const double* ground) noexcept {
@@ -418,6 +458,7 @@ double World::sensed_steer_rad(std::size_t i) const noexcept {
 void World::turn_steering(std::size_t i, double delta_rad) noexcept {
   if (i >= n_ || !std::isfinite(delta_rad)) return;
   modules_[i].phi_rad += delta_rad;
+  modules_[i].servo_ref_rad += delta_rad;
   for (std::size_t k = 0; k < history_size_; ++k) {
     history_[(history_head_ + k) % history_.size()].phi_rad[i] += delta_rad;
   }

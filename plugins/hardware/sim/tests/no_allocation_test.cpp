@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+
 #include "alloc_guard.hpp"
 #include "sim_hardware.hpp"
 #include "swivel/sim/open_loop.hpp"
@@ -49,6 +51,29 @@ TEST(NoAllocation, WorldStepAndReadWithEveryEffect) {
   EXPECT_EQ(counts.allocations, 0U) << "first: " << counts.first_allocation_bytes << " bytes";
   EXPECT_EQ(counts.deallocations, 0U);
   EXPECT_NE(hw.wheel_angle_rad[0], 0.0) << "the world did not move";
+}
+
+TEST(NoAllocation, WorldStepWithCasterForces) {
+  const RobotModel model = test::swpc4();
+  SimOptions options;
+  options.caster_forces.steering_yield_rad = 0.03;
+  World world(model, options);
+  const OpenLoopController controller(model);
+  HardwareState hw;
+  ActuatorCommand command;
+  HeapCounts counts;
+  {
+    const AllocCounter counter;
+    for (int k = 0; k < 2000; ++k) {
+      world.read(hw);
+      controller.velocity(k < 1000 ? Twist2{0.2, 0.1, 0.3} : Twist2{-0.1, 0.2, -0.2}, hw, command);
+      world.step(0.01, command);
+    }
+    counts = counter.counts();
+  }
+  EXPECT_EQ(counts.allocations, 0U) << "first: " << counts.first_allocation_bytes << " bytes";
+  EXPECT_EQ(counts.deallocations, 0U);
+  EXPECT_GT(std::hypot(world.true_pose().x_m, world.true_pose().y_m), 0.1) << "it did not move";
 }
 
 TEST(NoAllocation, PluginReadAndWrite) {

@@ -10,7 +10,10 @@
 //  - swpc: each module in one of three modes (ModuleDriveMode):
 //      kVelocity   wheel and steering rates tracked; with every module in this mode the
 //                  twist is the least-squares forward kinematics of the true geometry
-//                  (swpc::forward);
+//                  (swpc::forward), or, with servos that yield to their tyres
+//                  (SimOptions::caster_forces), the balance of the tyres' and servos' forces
+//                  (caster_forces.hpp): each steering rate is then the servo's reference's,
+//                  and the caster follows as far as its tyre lets it;
 //      kFreeSteer  wheel rate tracked, steering free: the module contributes its rolling
 //                  equation and its steering follows the no-lateral-slip condition
 //                  phi_dot = (n . v_s)/d - w, so the caster self-aligns;
@@ -33,6 +36,7 @@
 #include <vector>
 
 #include "swivel/robot_model.hpp"
+#include "swivel/sim/caster_forces.hpp"
 #include "swivel/sim/effects.hpp"
 #include "swivel/types.hpp"
 
@@ -67,6 +71,8 @@ struct SimOptions {
   Pose2 start_pose;
   /// True steering angles at t = 0 (swpc), rad.
   std::array<double, kMaxModules> initial_steer_rad{};
+  /// Steering servos that yield to their tyres (swpc); off with its yield at 0.
+  CasterForces caster_forces;
 };
 
 class World {
@@ -101,6 +107,10 @@ class World {
   /// Real-time safe. Turns module i's steering by `delta_rad`, now and in the history the
   /// sensor latency reads: for a replay that re-seats a caster on where a log shows it.
   void turn_steering(std::size_t i, double delta_rad) noexcept;
+  /// Sub-steps whose balance of caster forces did not converge (their last iterate was used).
+  [[nodiscard]] std::uint64_t caster_force_failures() const noexcept {
+    return caster_force_failures_;
+  }
   /// True steering rate of module i over the last sub-step, rad/s.
   [[nodiscard]] double true_steer_rate_radps(std::size_t i) const noexcept {
     return modules_[i].steer_rate_radps;
@@ -116,11 +126,14 @@ class World {
 
  private:
   struct ModuleState {
-    double phi_rad = 0.0;           // true steering angle
-    double psi_rad = 0.0;           // wheel rotation (what the encoder sees)
-    double wheel_rate_radps = 0.0;  // actual wheel rate (after the lag)
-    double steer_rate_radps = 0.0;  // actual steering rate of the last sub-step
-    double slip_state = 0.0;        // non-systematic slip process
+    double phi_rad = 0.0;                    // true steering angle
+    double psi_rad = 0.0;                    // wheel rotation (what the encoder sees)
+    double wheel_rate_radps = 0.0;           // actual wheel rate (after the lag)
+    double steer_rate_radps = 0.0;           // actual steering rate of the last sub-step
+    double servo_ref_rad = 0.0;              // caster forces: the servo's reference angle
+    double servo_rate_radps = 0.0;           // caster forces: its rate (after the steering lag)
+    double previous_steer_rate_radps = 0.0;  // caster forces: the sub-step before's
+    double slip_state = 0.0;                 // non-systematic slip process
   };
   // Sensor-side state at one instant, kept for the sensor_latency effect.
   struct SensorSample {
@@ -132,6 +145,8 @@ class World {
 
   void substep(double h_s, const ActuatorCommand& command) noexcept;
   Twist2 swpc_twist(const ActuatorCommand& command, const double* ground_rate) noexcept;
+  // Caster forces: the twist of a sub-step, every module's steering rate set.
+  Twist2 caster_force_twist(double h_s, const double* ground_rate) noexcept;
   void record_history() noexcept;
   void sensor_sample_at(double t_s, SensorSample& out) const noexcept;
   static double gaussian(std::mt19937_64& rng) noexcept;
@@ -146,6 +161,8 @@ class World {
   Twist2 twist_;
   std::array<ModuleState, kMaxModules> modules_{};
   double scrub_state_ = 0.0;
+  std::uint64_t caster_force_failures_ = 0;
+  Twist2 previous_twist_;  // caster forces: the sub-step before the last's
 
   std::mt19937_64 sensor_rng_;
   std::mt19937_64 process_rng_;
