@@ -345,6 +345,20 @@ std::vector<Row> simulate(const RunSpec& spec) {
   return simulate_commanded(spec, nullptr, nullptr);
 }
 
+std::vector<double> friction_limit_servo_errors_rad(const RunSpec& spec) {
+  const Design d = design(spec.design);
+  if (d.drive != Drive::kSwpc) return {};
+  const Truth& t = spec.truth;
+  const double load = d.mass_kg * kGravity / static_cast<double>(d.modules.size());
+  std::vector<double> out;
+  for (std::size_t i = 0; i < d.modules.size(); ++i) {
+    const double scale = i < t.caster_offset_scale.size() ? t.caster_offset_scale[i] : 1.0;
+    out.push_back(d.modules[i].caster_offset_m * scale * t.friction_coefficient * load /
+                  kSteeringKp);
+  }
+  return out;
+}
+
 std::vector<Row> simulate_commanded(const RunSpec& spec, const std::vector<double>* commands,
                                     std::vector<double>* used) {
   check(spec);

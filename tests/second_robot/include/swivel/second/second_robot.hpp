@@ -215,6 +215,11 @@ inline constexpr double kDrivingSpeedMps = 0.1;
 /// caster that never drives.
 std::vector<double> driving_servo_errors_rad(const std::vector<Row>& rows);
 
+/// Per caster, the servo error at which its tyre slides: d mu load / Kp, the trail, tyre
+/// friction and load of the true robot over its servo's stiffness. Empty for a differential
+/// robot.
+std::vector<double> friction_limit_servo_errors_rad(const RunSpec& spec);
+
 /// The largest of driving_servo_errors_rad() (0 for a differential robot).
 double largest_driving_servo_error_rad(const std::vector<Row>& rows);
 
