@@ -204,25 +204,33 @@ CommandReplay::CommandReplay(const RobotModel& nominal, const RunData& run,
   }
 }
 
-bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
-                             bool move_body, Track& track) const {
-  const RunData& run = *run_;
-  const std::size_t n = std::min(run.size(), end_row);
-  const sim::PlantParams plant = sim::resolve_plant(model);
+sim::SimOptions CommandReplay::world_options(const sim::PlantParams& plant,
+                                             const ActuatorNuisance& actuators,
+                                             bool move_body) const {
   sim::SimOptions options;
   options.sensor_noise = false;
   options.quantize_encoders = false;
   options.motion_capture = false;
   options.move_body = move_body;
   options.start_pose = sensors_->start_pose();
-  const double max_substep = swpc_ ? kSwpcSubstepS : kDifferentialSubstepS;
-  options.substep_s = max_substep;
+  options.substep_s = swpc_ ? kSwpcSubstepS : kDifferentialSubstepS;
   if (swpc_) {
+    options.caster_forces.steering_yield_rad = actuators.steering_yield_rad;
     for (std::size_t i = 0; i < modules_; ++i) {
-      options.initial_steer_rad[i] = run.steer_rad[i][0] + plant.modules[i].steering_offset_rad;
+      options.initial_steer_rad[i] = run_->steer_rad[i][0] + plant.modules[i].steering_offset_rad;
     }
   }
-  sim::World world(model, options);
+  return options;
+}
+
+bool CommandReplay::simulate(const RobotModel& model, const ActuatorNuisance& actuators,
+                             std::size_t end_row, bool move_body, Track& track) const {
+  const double command_delay_s = actuators.command_delay_s;
+  const RunData& run = *run_;
+  const std::size_t n = std::min(run.size(), end_row);
+  const sim::PlantParams plant = sim::resolve_plant(model);
+  const double max_substep = swpc_ ? kSwpcSubstepS : kDifferentialSubstepS;
+  sim::World world(model, world_options(plant, actuators, move_body));
   // The robot's controller knows only the nominal geometry; its limits are the model's.
   const sim::OpenLoopController controller(nominal_, plant.limits);
   motion::TwistLimiter limiter(plant.limits);
@@ -286,14 +294,14 @@ bool CommandReplay::simulate(const RobotModel& model, double command_delay_s, st
   return true;
 }
 
-bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
+bool CommandReplay::residuals(const RobotModel& model, const ActuatorNuisance& actuators,
                               std::vector<double>& out, std::size_t window_limit) const {
   const std::vector<Window>& windows = *windows_;
   const std::size_t w = windows.size();
   out.assign(channels_.size() * w, kNaN);
   const std::size_t used = std::min(w, window_limit);
   const std::size_t end_row = used == 0 ? 1 : windows[used - 1].b + 1;
-  if (!simulate(model, command_delay_s, end_row, false, track_)) return false;
+  if (!simulate(model, actuators, end_row, false, track_)) return false;
   const RunData& run = *run_;
   for (std::size_t j = 0; j < used; ++j) {
     if (compared_[j] == 0) continue;
@@ -320,14 +328,18 @@ bool CommandReplay::residuals(const RobotModel& model, double command_delay_s,
 }
 
 std::vector<double> CommandReplay::timing_variance(const RobotModel& model,
-                                                   double command_delay_s) const {
+                                                   const ActuatorNuisance& actuators) const {
   const std::vector<Window>& windows = *windows_;
   const std::size_t w = windows.size();
   std::vector<double> out(channels_.size() * w, 0.0);
   Track early;
   Track late;
-  if (!simulate(model, command_delay_s - 0.5 * row_period_s_, run_->size(), false, early) ||
-      !simulate(model, command_delay_s + 0.5 * row_period_s_, run_->size(), false, late)) {
+  ActuatorNuisance earlier = actuators;
+  ActuatorNuisance later = actuators;
+  earlier.command_delay_s -= 0.5 * row_period_s_;
+  later.command_delay_s += 0.5 * row_period_s_;
+  if (!simulate(model, earlier, run_->size(), false, early) ||
+      !simulate(model, later, run_->size(), false, late)) {
     return out;
   }
   // d: how much one row's change of the channel moves when the commands come a row later.
@@ -355,11 +367,11 @@ std::vector<double> CommandReplay::timing_variance(const RobotModel& model,
   return out;
 }
 
-void CommandReplay::path(const RobotModel& model, double command_delay_s,
+void CommandReplay::path(const RobotModel& model, const ActuatorNuisance& actuators,
                          std::vector<Pose2>& out) const {
   out.assign(run_->size(), Pose2{kNaN, kNaN, kNaN});
   Track track;
-  if (!simulate(model, command_delay_s, run_->size(), true, track)) return;
+  if (!simulate(model, actuators, run_->size(), true, track)) return;
   out = track.pose;
 }
 

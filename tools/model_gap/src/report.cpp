@@ -159,6 +159,7 @@ json report_json(const GapResult& r) {
   j["questions"] = json::array({question_json(r.sensor)});
   if (r.command_assessed) j["questions"].push_back(question_json(r.command));
   j["command_delay_s"] = r.command_delay_s;
+  j["steering_yield_rad"] = r.steering_yield_rad;
   {
     json truth = json::object();
     for (std::size_t i = 0; i < std::min(r.truth_names.size(), r.sensor.nuisance.size()); ++i) {
@@ -429,7 +430,12 @@ std::string markdown(const GapResult& r, bool plots) {
   if (r.command_assessed) {
     question_markdown(md, r.command, r.options.question);
     md << "The commands were replayed " << fmt(1000.0 * r.command_delay_s, 3)
-       << " ms late (fitted with the selection; negative: early).\n\n";
+       << " ms late (fitted with the selection; negative: early).";
+    if (r.steering_yield_rad > 0.0) {
+      md << " The steering servos yielded to their tyres from "
+         << fmt(1000.0 * r.steering_yield_rad, 3) << " mrad of error (fitted with it).";
+    }
+    md << "\n\n";
   }
   md << "Motion phases (from the commands): ";
   double durations[4] = {0, 0, 0, 0};

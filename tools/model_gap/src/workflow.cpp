@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <sstream>
 
 #include "motion_kind.hpp"
@@ -381,6 +382,19 @@ std::vector<Candidate> sensor_candidates(const RobotModel& nominal, const RunDat
   return library;
 }
 
+// Largest steering yield a fit may try, rad: d mu N / Kp for a servo as soft as a fifth of a
+// radian of error before its tyre slides.
+constexpr double kMaxSteeringYieldRad = 0.2;
+
+// The command replay's nuisance from the fitted values (command delay, then on a caster robot
+// the steering yield).
+ActuatorNuisance actuator_nuisance(std::span<const double> nuisance) {
+  ActuatorNuisance a;
+  if (!nuisance.empty()) a.command_delay_s = nuisance[0];
+  if (nuisance.size() > 1) a.steering_yield_rad = nuisance[1];
+  return a;
+}
+
 // The command question: each wheel's and steering angle's change over the windows, replayed
 // from the commands (`commands` must outlive the replay).
 QuestionReplay command_question_replay(const CommandReplay& commands, const SensorReplay& sensors,
@@ -398,11 +412,14 @@ QuestionReplay command_question_replay(const CommandReplay& commands, const Sens
   cq.window_start_s = motion.start_s;
   cq.residuals = [&commands](const RobotModel& model, std::span<const double> nuisance,
                              std::vector<double>& out, std::size_t window_limit) {
-    return commands.residuals(model, nuisance.empty() ? 0.0 : nuisance[0], out, window_limit);
+    return commands.residuals(model, actuator_nuisance(nuisance), out, window_limit);
   };
   const double row = commands.row_period_s();
   cq.nuisance.push_back({"command_delay_s", 0.0, row, -CommandReplay::kMaxCommandDelayRows * row,
                          CommandReplay::kMaxCommandDelayRows * row});
+  // From rigid servos (the kinematic replay): the run moves it as far as its servos yield.
+  if (run.drivetrain == DrivetrainKind::kSwpc)
+    cq.nuisance.push_back({"steering_yield_rad", 0.0, 0.01, 0.0, kMaxSteeringYieldRad});
   cq.own_change.resize(cq.channels.size() * w);
   for (std::size_t c = 0; c < cq.channels.size(); ++c) {
     const ChannelInfo& info = cq.channels[c];
@@ -416,7 +433,7 @@ QuestionReplay command_question_replay(const CommandReplay& commands, const Sens
       cq.own_change[c * w + j] = angle[windows[j].b] - angle[windows[j].a];
   }
   cq.known_variance_of = [&commands](const RobotModel& model, std::span<const double> nuisance) {
-    return commands.timing_variance(model, nuisance.empty() ? 0.0 : nuisance[0]);
+    return commands.timing_variance(model, actuator_nuisance(nuisance));
   };
   cq.accel = window_acceleration(motion);
   for (std::size_t j = 0; j < w; ++j)
@@ -437,10 +454,12 @@ void analyse_commands(const RobotModel& nominal, const RunData& run, const Senso
       Question::kCommandToMotion, command_base, cq,
       candidate_library(command_base, Question::kCommandToMotion, peaks, commands.row_period_s()),
       result.options.question);
-  result.command_delay_s = result.command.nuisance.empty() ? 0.0 : result.command.nuisance[0];
+  const ActuatorNuisance actuators = actuator_nuisance(result.command.nuisance);
+  result.command_delay_s = actuators.command_delay_s;
+  result.steering_yield_rad = actuators.steering_yield_rad;
   if (result.command.verdict == Verdict::kNamed) result.augmented = result.command.augmented;
-  commands.path(nominal, result.command_delay_s, result.replay_before);
-  commands.path(result.augmented, result.command_delay_s, result.replay_after);
+  commands.path(nominal, actuators, result.replay_before);
+  commands.path(result.augmented, actuators, result.replay_after);
 }
 
 }  // namespace

@@ -124,6 +124,7 @@ CaseOutcome score(const std::string& id, RunKind kind, const std::vector<HiddenE
   out.kind = kind;
   out.robot = r.nominal.name;
   out.swpc = r.nominal.drivetrain == DrivetrainKind::kSwpc;
+  if (out.swpc && r.command_assessed) out.fitted_steering_yield_rad = r.steering_yield_rad;
   for (const auto& e : hidden) out.hidden[index_of(question_of(e.effect))].push_back(e.effect);
   for (const QuestionResult* q : {&r.sensor, &r.command}) {
     const std::size_t i = index_of(q->question);

@@ -95,6 +95,11 @@ struct CaseOutcome {
   /// their tyres (swivel::second::kFightingServoErrorRad); unset otherwise.
   std::optional<double> driving_servo_error_rad;
   std::optional<bool> servos_fighting;
+  /// Caster runs whose command question was asked: the servos' yield it fitted
+  /// (GapResult::steering_yield_rad); and, for the second generator's, the truth's
+  /// (swivel::second::friction_limit_servo_errors_rad(), the median over its casters).
+  std::optional<double> fitted_steering_yield_rad;
+  std::optional<double> true_steering_yield_rad;
 };
 
 /// Scores `result` against what was hidden. `allowed_outside`: effects an outside case may

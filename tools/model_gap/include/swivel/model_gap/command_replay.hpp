@@ -7,8 +7,9 @@
 //
 // The question is how the robot's actuators answered its commands; how the encoders' motion
 // moved the robot is the sensor-to-pose question's. So the replayed body does not move
-// (SimOptions::move_body), which makes this replay cheap enough to fit. The whole robot is
-// replayed only for the report's path (path()).
+// (SimOptions::move_body), which makes this replay cheap enough to fit, except on a caster
+// robot whose servos yield (below): there the body's motion is what turns the casters. The
+// whole robot is replayed for the report's path (path()).
 //
 // Logged commands are samples of a signal that may change between rows. A row's command is
 // taken to hold from halfway to the row before to halfway to the row after: for a signal
@@ -30,6 +31,15 @@
 // encoder count the log resolves, so such windows are not compared. Elsewhere the replayed
 // caster runs free, as the robot's did, and trailing pulls both back into line.
 //
+// A caster robot's steering servos yield to their tyres (ActuatorNuisance::steering_yield_rad;
+// sim::CasterForces): a servo whose reference runs ahead of what its tyre lets the caster do
+// (a controller that steers by a geometry or angles the robot does not have) winds up until it
+// drags the tyre across the floor, and the caster stays behind by the servo error whose torque
+// matches the tyre's friction; where the motion turns the caster back, or the robot stops and
+// starts, it lets go. Rigid servos would turn the replay's casters exactly as commanded, and
+// the steering and wheel channels would blame that on an effect. With a yield, the casters
+// and body move by the balance of the tyres', servos' and body's forces at every sub-step.
+//
 // Channels, per window: replay.wheel_<l|r|i>_rad (wheel rotation), replay.steer_<i>_rad
 // (steering rotation, swpc).
 
@@ -40,8 +50,17 @@
 #include "swivel/model_gap/sensor_replay.hpp"
 #include "swivel/model_gap/windows.hpp"
 #include "swivel/robot_model.hpp"
+#include "swivel/sim/world.hpp"
 
 namespace swivel::model_gap {
+
+/// What the command replay fits beside the effects.
+struct ActuatorNuisance {
+  /// The commands taken this late, s.
+  double command_delay_s = 0.0;
+  /// Servo error at which a caster's tyre gives way (swpc), rad; 0: rigid servos.
+  double steering_yield_rad = 0.0;
+};
 
 class CommandReplay {
  public:
@@ -62,9 +81,10 @@ class CommandReplay {
   [[nodiscard]] double row_period_s() const { return row_period_s_; }
 
   /// Measured minus predicted change of every channel over every window (channel-major),
-  /// for the robot `model` with commands taken `command_delay_s` late. False when the
+  /// for the robot `model` with the actuators' nuisance `actuators`. False when the
   /// simulation fails.
-  bool residuals(const RobotModel& model, double command_delay_s, std::vector<double>& out,
+  bool residuals(const RobotModel& model, const ActuatorNuisance& actuators,
+                 std::vector<double>& out,
                  std::size_t window_limit = static_cast<std::size_t>(-1)) const;
 
   /// Variance each window's residual gets (channel-major) from not knowing when within its
@@ -74,10 +94,11 @@ class CommandReplay {
   /// vanishes in a window that ends turning as fast as it began (a turn slowing, then a
   /// translation starting), though each change in it came at an instant of its own.
   [[nodiscard]] std::vector<double> timing_variance(const RobotModel& model,
-                                                    double command_delay_s) const;
+                                                    const ActuatorNuisance& actuators) const;
 
   /// The replayed robot's true pose at every row, from the run's start pose.
-  void path(const RobotModel& model, double command_delay_s, std::vector<Pose2>& out) const;
+  void path(const RobotModel& model, const ActuatorNuisance& actuators,
+            std::vector<Pose2>& out) const;
 
  private:
   struct Track {
@@ -85,7 +106,11 @@ class CommandReplay {
     std::vector<std::vector<double>> wheel;
     std::vector<std::vector<double>> steer;  // per row: turn in the row
   };
-  bool simulate(const RobotModel& model, double command_delay_s, std::size_t end_row,
+  // The world's options: noise off, from the run's start and its first steering angles.
+  [[nodiscard]] sim::SimOptions world_options(const sim::PlantParams& plant,
+                                              const ActuatorNuisance& actuators,
+                                              bool move_body) const;
+  bool simulate(const RobotModel& model, const ActuatorNuisance& actuators, std::size_t end_row,
                 bool move_body, Track& track) const;
 
   RobotModel nominal_;

@@ -67,6 +67,7 @@ struct GapResult {
   std::vector<double> window_start_s;  ///< per window, for the residual plots
   std::vector<PhaseSegment> segments;  ///< motion phases of the commands
   double command_delay_s = 0.0;        ///< the commands' timing, fitted with the selection
+  double steering_yield_rad = 0.0;     ///< caster robots: the servos' yield, fitted with it
   GapOptions options;
   double wall_time_s = 0.0;
 
