@@ -6,16 +6,16 @@
 //                for comparison and never judged;
 //   validation   runs of the second robot generator (tests/second_robot) drawn from seed
 //                ranges never used while developing (validation_set.hpp: clean
-//                48877460-48877699, library 33651945-33652012, outside 32770834-32770845).
+//                77376489-77376728, library 90621190-90621257, outside 83477096-83477107).
 //                The pre-registered targets (validation_stats.hpp) are judged on this set;
-//   first- to eleventh-validation  the same cases from the earlier validation sets' seeds
+//   first- to twelfth-validation  the same cases from the earlier validation sets' seeds
 //                (7340001..., 28880001..., 72548103..., 26341837..., 98462895..., 76076734...,
-//                96537188..., 50642445..., 19798844..., 42696577..., 90474719...),
+//                96537188..., 50642445..., 19798844..., 42696577..., 90474719..., 48877460...),
 //                looked at after changes and are development data now: reported with the targets
 //                beside them, never judged (only with --set first-validation etc.).
 //
 //   swivel-bench-model-gap [--set development|validation|first-validation|...|
-//                                 eleventh-validation|both] [--quick] [--jobs N]
+//                                 twelfth-validation|both] [--quick] [--jobs N]
 //   swivel-bench-model-gap --case ID [--case ID ...]     development cases by id
 //   swivel-bench-model-gap --repeat N                    each library effect's smoke case N
 //                times over, the same robot, effect and rates with fresh noise and path: how
@@ -124,6 +124,10 @@ void print_runs(const std::vector<CaseOutcome>& outcomes) {
       std::printf("    servos fighting their tyres: largest median servo error %.1f mrad\n",
                   o.driving_servo_error_rad.value_or(0.0) * 1e3);
     }
+    if (o.kind == RunKind::kLibrary && o.fitted_steering_yield_rad && o.true_steering_yield_rad) {
+      std::printf("    servos' yield: fitted %.1f mrad, the generator's d mu load / Kp %.1f mrad\n",
+                  *o.fitted_steering_yield_rad * 1e3, *o.true_steering_yield_rad * 1e3);
+    }
     for (const auto& p : o.params) {
       std::printf("    %s.%s: truth %.6g, fitted %.6g +- %.2g (%.1f sigma)\n", p.effect.c_str(),
                   p.key.c_str(), p.truth, p.value, p.sigma, p.deviation());
@@ -173,9 +177,32 @@ void print_friction_limited_split(const validation::SetFigures& f) {
                f.friction_limited_no_wrong_name);
 }
 
-// The figures the targets are set on, for each drivetrain on its own: the replays are
-// kinematic, and caster robots (steering servos, scrub while casters turn) are where they
-// fall short; their runs named right are split by whether the servos fight their tyres.
+// The servos' yield the command question fitted against the generator's (fitted over true,
+// caster runs), for the runs whose servos fight their tyres (where the run fixes it) and the
+// rest (which may not reach it).
+void print_steering_yield(const std::vector<CaseOutcome>& outcomes) {
+  for (const bool fighting : {true, false}) {
+    std::vector<double> ratio;
+    for (const CaseOutcome& o : outcomes) {
+      if (o.fitted_steering_yield_rad && o.true_steering_yield_rad &&
+          o.servos_fighting.value_or(false) == fighting && *o.true_steering_yield_rad > 0.0)
+        ratio.push_back(*o.fitted_steering_yield_rad / *o.true_steering_yield_rad);
+    }
+    if (ratio.empty()) continue;
+    std::ranges::sort(ratio);
+    const auto at = [&](double q) {
+      return ratio[static_cast<std::size_t>(q * static_cast<double>(ratio.size() - 1) + 0.5)];
+    };
+    std::printf(
+        "  servos' yield, fitted over the generator's (%s): median %.2f, "
+        "10-90 %% %.2f-%.2f over %zu runs\n",
+        fighting ? "servos fighting" : "not fighting", at(0.5), at(0.1), at(0.9), ratio.size());
+  }
+}
+
+// The figures the targets are set on, for each drivetrain on its own: caster robots
+// (steering servos, scrub while casters turn) are where the replays fall short; their runs
+// named right are split by whether the servos fight their tyres.
 void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
   for (const bool swpc : {false, true}) {
     std::vector<CaseOutcome> part;
@@ -191,6 +218,7 @@ void print_by_drivetrain(const std::vector<CaseOutcome>& outcomes) {
       print_figure("  servos fighting their tyres: named right", f.named_right_servos_fighting);
       print_figure("  servos not fighting: named right", f.named_right_servos_not_fighting);
     }
+    if (swpc) print_steering_yield(part);
     print_figure("coverage: hidden parameters within 1 sigma", f.within_1_sigma);
     print_figure("coverage: hidden parameters within 3 sigma", f.within_3_sigma);
   }
@@ -323,6 +351,9 @@ std::vector<Job> validation_jobs(const std::vector<swivel::second::ValidationCas
              o.driving_servo_error_rad = run.driving_servo_error_rad;
              o.servos_fighting =
                  run.driving_servo_error_rad >= swivel::second::kFightingServoErrorRad;
+             std::vector<double> yield = swivel::second::friction_limit_servo_errors_rad(c.spec);
+             std::ranges::sort(yield);
+             if (!yield.empty()) o.true_steering_yield_rad = yield[yield.size() / 2];
            }
            const bool mounted = c.spec.truth.marker_x_m != 0.0 || c.spec.truth.marker_y_m != 0.0 ||
                                 c.spec.truth.marker_yaw_rad != 0.0;
@@ -422,7 +453,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> sets = {"development", "validation", "both"};
   sets.insert(sets.end(), earlier.begin(), earlier.end());
   app.add_option("--set", set,
-                 "development, validation, first- to eleventh-validation (earlier sets), or both")
+                 "development, validation, first- to twelfth-validation (earlier sets), or both")
       ->check(CLI::IsMember(sets));
   app.add_flag("--quick", quick,
                "smoke test: the battery's subset and a few smoke-range runs; nothing judged");

@@ -71,7 +71,7 @@ struct SetFigures {
   Proportion named_right_size_in_motion;
   Proportion friction_limited_no_wrong_name;
   /// named_right over the library runs with CaseOutcome::servos_fighting set (caster robots of
-  /// the second generator), split by it: the replays are kinematic and slide no tyre.
+  /// the second generator), split by it: the sensor replay is kinematic and slides no tyre.
   Proportion named_right_servos_fighting;
   Proportion named_right_servos_not_fighting;
   Proportion outside_right;  ///< outside runs: the case's rule holds
