@@ -153,6 +153,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "ninth-validation") return &kNinthValidationSeeds;
   if (name == "tenth-validation") return &kTenthValidationSeeds;
   if (name == "eleventh-validation") return &kEleventhValidationSeeds;
+  if (name == "twelfth-validation") return &kTwelfthValidationSeeds;
   return nullptr;
 }
 
@@ -169,7 +170,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "eighth-validation",
                                                  "ninth-validation",
                                                  "tenth-validation",
-                                                 "eleventh-validation"};
+                                                 "eleventh-validation",
+                                                 "twelfth-validation"};
   return names;
 }
 

@@ -608,7 +608,7 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
         kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
-        kTenthValidationSeeds, kEleventhValidationSeeds}) {
+        kTenthValidationSeeds, kEleventhValidationSeeds, kTwelfthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -639,7 +639,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("ninth-validation"), &kNinthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("tenth-validation"), &kTenthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("eleventh-validation"), &kEleventhValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("twelfth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("twelfth-validation"), &kTwelfthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("thirteenth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
