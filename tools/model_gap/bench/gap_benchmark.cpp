@@ -191,7 +191,8 @@ void print_steering_yield(const std::vector<CaseOutcome>& outcomes) {
     if (ratio.empty()) continue;
     std::ranges::sort(ratio);
     const auto at = [&](double q) {
-      return ratio[static_cast<std::size_t>(q * static_cast<double>(ratio.size() - 1) + 0.5)];
+      return ratio[static_cast<std::size_t>(
+          std::lround(q * static_cast<double>(ratio.size() - 1)))];
     };
     std::printf(
         "  servos' yield, fitted over the generator's (%s): median %.2f, "
