@@ -178,7 +178,7 @@ bool caster_force_step(const CasterForces& model, std::span<const SwpcModulePara
   const auto size = static_cast<Eigen::Index>(3 + n);
   const StepBalance balance(model, modules, casters, h_s, previous_twist);
   Vector x(size);
-  x << twist.vx_mps, twist.vy_mps, twist.wz_radps;
+  x.head<3>() << twist.vx_mps, twist.vy_mps, twist.wz_radps;
   for (std::size_t i = 0; i < n; ++i) x(static_cast<Eigen::Index>(3 + i)) = steer_rate_radps[i];
   Vector r(size);
   Vector trial(size);
