@@ -327,6 +327,19 @@ double DynamixelHardware::angle_at(std::int32_t servo, double stamp_s) const noe
   return output_angle(i, timed_.position[i]) + rate_radps * age_s;
 }
 
+double DynamixelHardware::steer_angle_at(std::uint32_t m, double stamp_s) const noexcept {
+  const std::int32_t servo = steer_servo_[m];
+  if (servo < 0) return 0.0;
+  // A servo that stops on its goal while its replies come late would otherwise be carried
+  // past the goal by its last velocity, to snap back at the next timed reading: an encoder
+  // jump to the drivetrain. The goal moves on at the commanded rate since it was written.
+  const double sampled = output_angle(static_cast<std::size_t>(servo), timed_.position[servo]);
+  const double goal =
+      reading_.steer_goal_rad[m] +
+      commanded_steer_rate_[m] * std::clamp(stamp_s - reading_.goal_s, 0.0, stale_timeout_s_);
+  return std::clamp(angle_at(servo, stamp_s), std::min(sampled, goal), std::max(sampled, goal));
+}
+
 double DynamixelHardware::output_angle(std::size_t i, std::int32_t counts) const noexcept {
   const Servo& s = servos_[i];
   const double angle = s.direction * counts * kRadPerCount / s.gear_ratio;
@@ -552,6 +565,9 @@ Status DynamixelHardware::activate() {
   reading_.stamp_s = swivel::monotonic_s();
   reading_.sample_s = reading_.stamp_s;
   reading_.servo_sample_s.fill(reading_.stamp_s);
+  reading_.steer_goal_rad = start_steer_rad_;
+  reading_.goal_s = reading_.stamp_s;
+  commanded_steer_rate_.fill(0.0);
   timed_ = reading_;
   cycles_without_reading_ = 0;
   stop_.store(false, std::memory_order_release);
@@ -659,6 +675,8 @@ void DynamixelHardware::bus_loop(Reading r) noexcept {
     ok = ok && (steer_ids_.empty() || bus.sync_write(dxl::address::kGoalPosition, 4, steer_ids_,
                                                      {data.data(), 4 * steer_ids_.size()}));
     const double request_s = swivel::monotonic_s();
+    r.steer_goal_rad = steer_target;
+    r.goal_s = request_s;
     ok = ok && bus.sync_read(dxl::address::kPresentVelocity, 8, ids, replies, reply_timeout_s_);
     if (!ok && r.fault == FaultKind::kNone) r.fault = FaultKind::kPort;
     const double end_s = swivel::monotonic_s();
@@ -766,7 +784,7 @@ Status DynamixelHardware::read(double stamp_s, HardwareState& out) noexcept {
   out.module_count = module_count_;
   for (std::uint32_t m = 0; m < module_count_; ++m) {
     out.wheel_angle_rad[m] = angle_at(wheel_servo_[m], stamp_s);
-    out.steer_angle_rad[m] = angle_at(steer_servo_[m], stamp_s);
+    out.steer_angle_rad[m] = steer_angle_at(m, stamp_s);
   }
   out.gyro_valid = false;
   out.gyro_wz_radps = 0.0;
@@ -790,6 +808,10 @@ Status DynamixelHardware::write(const ActuatorCommand& command) noexcept {
       last_error_ = "dynamixel: drive mode not supported (velocity and locked only)";
       return Status::kError;
     }
+  }
+  for (std::uint32_t m = 0; m < command.module_count; ++m) {
+    commanded_steer_rate_[m] =
+        command.mode[m] == ModuleDriveMode::kLocked ? 0.0 : command.steer_rate_radps[m];
   }
   commands_.publish(command);
   return Status::kOk;

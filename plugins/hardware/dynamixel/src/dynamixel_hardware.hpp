@@ -122,6 +122,9 @@ class DynamixelHardware final : public Hardware {
     /// CLOCK_MONOTONIC the servo sampled position[i] and velocity[i] (estimated): a servo
     /// whose reply failed (bad CRC) keeps its last values and their time.
     std::array<double, kMaxServos> servo_sample_s{};
+    /// Each module's steering goal (output angle) as written in this cycle, and when.
+    std::array<double, kMaxModules> steer_goal_rad{};
+    double goal_s = 0.0;
     FaultKind fault = FaultKind::kNone;
     std::uint8_t fault_servo = 0;
     std::uint8_t hardware_error = 0;
@@ -171,6 +174,9 @@ class DynamixelHardware final : public Hardware {
   [[nodiscard]] double output_angle(std::size_t i, std::int32_t counts) const noexcept;
   // Output angle of servo `servo` (-1: none, 0) extrapolated from its sample to `stamp_s`.
   [[nodiscard]] double angle_at(std::int32_t servo, double stamp_s) const noexcept;
+  // Module m's steering angle at `stamp_s`: extrapolated as angle_at(), but no further than
+  // its goal, which a position servo does not pass.
+  [[nodiscard]] double steer_angle_at(std::uint32_t m, double stamp_s) const noexcept;
 
   // Configuration.
   std::string port_path_;
@@ -215,6 +221,7 @@ class DynamixelHardware final : public Hardware {
   Reading reading_{};  ///< the newest reading: its faults count
   Reading timed_{};    ///< the newest with a known sampling time: the angles come from it
   std::uint32_t cycles_without_reading_ = 0;
+  std::array<double, kMaxModules> commanded_steer_rate_{};  ///< as last written, 0 locked
   std::uint32_t stale_cycles_ = 50;
   const char* last_error_ = "";
 };

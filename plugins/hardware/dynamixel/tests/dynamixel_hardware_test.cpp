@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -853,4 +854,50 @@ TEST(DynamixelHardware, ExchangeFloorForgetsAnOldQuickestExchange) {
   EXPECT_DOUBLE_EQ(floor.value(), 0.004) << "two blocks on the new latency is the floor";
   floor.add(1.6, 0.002);
   EXPECT_DOUBLE_EQ(floor.value(), 0.002) << "a quicker one counts at once";
+}
+
+// A steering servo stops on its goal while its replies come late (a loaded host): its last
+// timed velocity must not carry the angle past the goal, to snap back when the replies are
+// on time again. That snap is an encoder jump to the drivetrain, a safe stop.
+TEST(DynamixelHardware, SteeringThatStopsWhileRepliesAreLateDoesNotJump) {
+  dxl::Emulator emulator(ids({1, 11, 2, 12, 3, 13, 4, 14}));
+  const RobotModel model = swpc(4);
+  DynamixelHardware hw;
+  configure(hw, model,
+            "{port: " + emulator.port() +
+                ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: ["
+                "{wheel: {id: 1}, steer: {id: 11}}, {wheel: {id: 2}, steer: {id: 12}},"
+                "{wheel: {id: 3}, steer: {id: 13}}, {wheel: {id: 4}, steer: {id: 14}}]}");
+  ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
+  ActuatorCommand steer;
+  steer.module_count = 4;
+  for (std::size_t m = 0; m < 4; ++m) steer.steer_rate_radps[m] = 6.0;
+  const ActuatorCommand hold{4, {}, {}, {}};
+  HardwareState s;
+  ASSERT_EQ(run(hw, hold, 0.1, s), Status::kOk) << hw.last_error();
+  ASSERT_EQ(run(hw, steer, 0.25, s), Status::kOk) << hw.last_error();
+  double worst_rad = 0.0;
+  HardwareState previous = s;
+  const double start = swivel::monotonic_s();
+  bool restored = false;
+  const std::vector<std::uint8_t> kSteerIds = {11, 12, 13, 14};
+  for (const std::uint8_t id : kSteerIds) emulator.set_reply_delay(id, 0.01);
+  for (;;) {
+    const double now = swivel::monotonic_s();
+    if (now - start >= 0.5) break;
+    if (!restored && now - start > 0.25) {
+      for (const std::uint8_t id : kSteerIds) emulator.set_reply_delay(id, 0.0);
+      restored = true;
+    }
+    ASSERT_EQ(hw.read(now, s), Status::kOk) << hw.last_error();
+    ASSERT_EQ(hw.write(hold), Status::kOk) << hw.last_error();
+    worst_rad = std::max(worst_rad, std::abs(s.steer_angle_rad[0] - previous.steer_angle_rad[0]));
+    previous = s;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  // 6 rad/s x 1 ms at most while it still moves; a snap back would be the last velocity
+  // times the replies' lateness and more (over a radian before the goal bounded it).
+  std::printf("largest one-cycle step of the steering: %.4f rad\n", worst_rad);
+  EXPECT_LT(worst_rad, 0.03);
+  hw.deactivate();
 }
