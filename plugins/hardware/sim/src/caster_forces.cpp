@@ -194,11 +194,13 @@ bool caster_force_step(const CasterForces& model, std::span<const SwpcModulePara
     }
     if (!jac.solve(n, r, step)) break;
     // Newton's step, halved until the balance improves (the friction caps bend it sharply).
+    // The whole step, mostly taken, brings its Jacobian; a halved one gets it once taken.
     double scale = 1.0;
     bool improved = false;
-    for (int halving = 0; halving < kMaxHalvings && !improved; ++halving) {
+    int halving = 0;
+    for (; halving < kMaxHalvings && !improved; ++halving) {
       trial = x - scale * step;
-      balance(trial, r_trial, &jac);
+      balance(trial, r_trial, halving == 0 ? &jac : nullptr);
       improved = r_trial.squaredNorm() < r.squaredNorm();
       if (!improved) scale *= 0.5;
     }
@@ -207,6 +209,7 @@ bool caster_force_step(const CasterForces& model, std::span<const SwpcModulePara
     if (!improved) break;
     x = trial;
     r = r_trial;
+    if (halving > 1 && !converged) balance(x, r, &jac);
   }
   twist = Twist2{x(0), x(1), x(2)};
   for (std::size_t i = 0; i < n; ++i) steer_rate_radps[i] = x(static_cast<Eigen::Index>(3 + i));

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "swivel/sim/world.hpp"
 #include "test_support.hpp"
@@ -126,15 +127,34 @@ TEST(CasterForces, AServoSteeredAgainstTheRollingWindsUpUntilItDragsItsTyre) {
   EXPECT_EQ(world.caster_force_failures(), 0U);
 }
 
-TEST(CasterForces, AYieldThatIsNotANumberOrNegativeIsRefused) {
-  for (const double yield : {-0.01, std::numeric_limits<double>::quiet_NaN()}) {
-    SimOptions options;
-    options.caster_forces.steering_yield_rad = yield;
-    EXPECT_THROW(World(test::swpc4(), options), std::invalid_argument) << yield;
-  }
+// The message a world built with `forces` is refused with, "" when it is accepted.
+std::string refusal(const CasterForces& forces) {
   SimOptions options;
-  options.caster_forces.servo_damping_s = 0.0;
-  EXPECT_THROW(World(test::swpc4(), options), std::invalid_argument);
+  options.caster_forces = forces;
+  try {
+    World world(test::swpc4(), options);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CasterForces, AYieldThatIsNotANumberOrNegativeIsRefused) {
+  for (const double yield :
+       {-0.01, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    CasterForces forces;
+    forces.steering_yield_rad = yield;
+    EXPECT_EQ(refusal(forces), "caster forces: steering_yield_rad must be finite and >= 0")
+        << yield;
+  }
+  CasterForces damping;
+  damping.servo_damping_s = 0.0;
+  EXPECT_EQ(refusal(damping), "caster forces: servo_damping_s must be finite and positive");
+  CasterForces friction;
+  friction.friction_coefficient = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(refusal(friction), "caster forces: friction_coefficient must be finite and positive");
+  CasterForces rigid;  // the default: off
+  EXPECT_EQ(refusal(rigid), "");
 }
 
 }  // namespace
