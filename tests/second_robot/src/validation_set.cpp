@@ -154,6 +154,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "tenth-validation") return &kTenthValidationSeeds;
   if (name == "eleventh-validation") return &kEleventhValidationSeeds;
   if (name == "twelfth-validation") return &kTwelfthValidationSeeds;
+  if (name == "thirteenth-validation") return &kThirteenthValidationSeeds;
   return nullptr;
 }
 
@@ -171,7 +172,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "ninth-validation",
                                                  "tenth-validation",
                                                  "eleventh-validation",
-                                                 "twelfth-validation"};
+                                                 "twelfth-validation",
+                                                 "thirteenth-validation"};
   return names;
 }
 

@@ -608,7 +608,8 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
        {kSmokeSeeds, kFirstValidationSeeds, kSecondValidationSeeds, kThirdValidationSeeds,
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
         kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
-        kTenthValidationSeeds, kEleventhValidationSeeds, kTwelfthValidationSeeds}) {
+        kTenthValidationSeeds, kEleventhValidationSeeds, kTwelfthValidationSeeds,
+        kThirteenthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -640,7 +641,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("tenth-validation"), &kTenthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("eleventh-validation"), &kEleventhValidationSeeds);
   EXPECT_EQ(seed_ranges_named("twelfth-validation"), &kTwelfthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("thirteenth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("thirteenth-validation"), &kThirteenthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("fourteenth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
