@@ -79,6 +79,12 @@ std::string diff_params(const std::string& port, const std::string& extra = "") 
          timeout + extra + "}";
 }
 
+// The same timeouts for a caster robot whose `modules` list is given.
+std::string swpc_params(const std::string& port, const std::string& modules) {
+  return "{port: " + port + ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: [" + modules +
+         "]}";
+}
+
 // Runs a 1 kHz read/write loop for `seconds` with `command`, stamped on CLOCK_MONOTONIC like
 // the loop's; returns the last status and state (stops at the first kError).
 Status run(DynamixelHardware& hw, const ActuatorCommand& command, double seconds,
@@ -223,12 +229,11 @@ TEST(DynamixelHardware, SwpcSteersInExtendedPositionAndDrivesWheels) {
   const RobotModel model = swpc(4);
   DynamixelHardware hw;
   configure(hw, model,
-            "{port: " + emulator.port() +
-                ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: ["
-                "{wheel: {id: 1}, steer: {id: 11, zero_offset_rad: 0.5}},"
-                "{wheel: {id: 2}, steer: {id: 12, gear_ratio: 3}},"
-                "{wheel: {id: 3, direction: -1}, steer: {id: 13, direction: -1}},"
-                "{wheel: {id: 4}, steer: {id: 14}}]}");
+            swpc_params(emulator.port(),
+                        "{wheel: {id: 1}, steer: {id: 11, zero_offset_rad: 0.5}},"
+                        "{wheel: {id: 2}, steer: {id: 12, gear_ratio: 3}},"
+                        "{wheel: {id: 3, direction: -1}, steer: {id: 13, direction: -1}},"
+                        "{wheel: {id: 4}, steer: {id: 14}}"));
   ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
   EXPECT_EQ(emulator.operating_mode(11), dxl::operating_mode::kExtendedPosition);
   EXPECT_EQ(emulator.operating_mode(1), dxl::operating_mode::kVelocity);
@@ -864,10 +869,9 @@ TEST(DynamixelHardware, SteeringThatStopsWhileRepliesAreLateDoesNotJump) {
   const RobotModel model = swpc(4);
   DynamixelHardware hw;
   configure(hw, model,
-            "{port: " + emulator.port() +
-                ", reply_timeout_s: 0.2, stale_timeout_s: 1.0, modules: ["
-                "{wheel: {id: 1}, steer: {id: 11}}, {wheel: {id: 2}, steer: {id: 12}},"
-                "{wheel: {id: 3}, steer: {id: 13}}, {wheel: {id: 4}, steer: {id: 14}}]}");
+            swpc_params(emulator.port(),
+                        "{wheel: {id: 1}, steer: {id: 11}}, {wheel: {id: 2}, steer: {id: 12}},"
+                        "{wheel: {id: 3}, steer: {id: 13}}, {wheel: {id: 4}, steer: {id: 14}}"));
   ASSERT_EQ(hw.activate(), Status::kOk) << hw.last_error();
   ActuatorCommand steer;
   steer.module_count = 4;
