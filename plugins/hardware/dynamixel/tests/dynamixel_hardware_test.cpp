@@ -884,13 +884,13 @@ TEST(DynamixelHardware, SteeringThatStopsWhileRepliesAreLateDoesNotJump) {
   HardwareState previous = s;
   const double start = swivel::monotonic_s();
   bool restored = false;
-  const std::vector<std::uint8_t> kSteerIds = {11, 12, 13, 14};
-  for (const std::uint8_t id : kSteerIds) emulator.set_reply_delay(id, 0.01);
+  const std::vector<std::uint8_t> steer_ids = {11, 12, 13, 14};
+  for (const std::uint8_t id : steer_ids) emulator.set_reply_delay(id, 0.01);
   for (;;) {
     const double now = swivel::monotonic_s();
     if (now - start >= 0.5) break;
     if (!restored && now - start > 0.25) {
-      for (const std::uint8_t id : kSteerIds) emulator.set_reply_delay(id, 0.0);
+      for (const std::uint8_t id : steer_ids) emulator.set_reply_delay(id, 0.0);
       restored = true;
     }
     ASSERT_EQ(hw.read(now, s), Status::kOk) << hw.last_error();
