@@ -886,19 +886,31 @@ TEST(DynamixelHardware, SteeringThatStopsWhileRepliesAreLateDoesNotJump) {
   bool restored = false;
   const std::vector<std::uint8_t> steer_ids = {11, 12, 13, 14};
   for (const std::uint8_t id : steer_ids) emulator.set_reply_delay(id, 0.01);
-  for (;;) {
-    const double now = swivel::monotonic_s();
-    if (now - start >= 0.5) break;
-    if (!restored && now - start > 0.25) {
-      for (const std::uint8_t id : steer_ids) emulator.set_reply_delay(id, 0.0);
-      restored = true;
+  bool failed = false;
+  swivel::test::HeapCounts counts;
+  {
+    // The bounded steering path runs on the loop's thread: no heap there either.
+    swivel::test::AllocCounter counter;
+    for (;;) {
+      const double now = swivel::monotonic_s();
+      if (now - start >= 0.5) break;
+      if (!restored && now - start > 0.25) {
+        for (const std::uint8_t id : steer_ids) emulator.set_reply_delay(id, 0.0);
+        restored = true;
+      }
+      if (hw.read(now, s) != Status::kOk || hw.write(hold) != Status::kOk) {
+        failed = true;
+        break;
+      }
+      worst_rad = std::max(worst_rad, std::abs(s.steer_angle_rad[0] - previous.steer_angle_rad[0]));
+      previous = s;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
-    ASSERT_EQ(hw.read(now, s), Status::kOk) << hw.last_error();
-    ASSERT_EQ(hw.write(hold), Status::kOk) << hw.last_error();
-    worst_rad = std::max(worst_rad, std::abs(s.steer_angle_rad[0] - previous.steer_angle_rad[0]));
-    previous = s;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    counts = counter.counts();
   }
+  ASSERT_FALSE(failed) << hw.last_error();
+  EXPECT_EQ(counts.allocations, 0U);
+  EXPECT_EQ(counts.deallocations, 0U);
   // 6 rad/s x 1 ms at most while it still moves; a snap back would be the last velocity
   // times the replies' lateness and more (over a radian before the goal bounded it).
   std::printf("largest one-cycle step of the steering: %.4f rad\n", worst_rad);
