@@ -286,7 +286,8 @@ SensorReplay::SensorReplay(const RobotModel& nominal, const RunData& run, double
   const double tail = fit_time_offset_ ? kMaxTimeOffsetS + drift + kMaxLatencyS : kMaxLatencyS;
   windows_ = make_windows(run, window_s, run.t_s.front() + lead, run.t_s.back() - tail);
   motion_ = window_motion(run, windows_);
-  // Anchors use the nominal dead reckoning as the local shape of the path.
+  // These anchors (the nominal dead reckoning as the path's local shape) describe the
+  // windows' own motion; residuals() anchors on each replay's own path instead.
   std::vector<Pose2> shape;
   path(sim::resolve_plant(nominal), TruthNuisance{}, shape);
   for (const Window& w : windows_) {
@@ -420,13 +421,14 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   const std::size_t w = windows_.size();
   out.assign(channels_.size() * w, kNaN);
   const std::size_t used = std::min(w, window_limit);
-  // Rows up to the last window's end plus the longest latency a fit may try.
+  // Rows up to the last window's end and the rows its anchor averages, plus the shift.
   std::size_t end_row = run_->size();
   if (used > 0 && used < w) {
     const double last = run_->t_s[windows_[used - 1].b];
     const double shift = shift_at(plant.sensor_delay_s, truth, last);
-    end_row = windows_[used - 1].b + 1;
-    while (end_row < run_->size() && run_->t_s[end_row - 1] < last + std::max(shift, 0.0))
+    end_row = std::min(run_->size(), windows_[used - 1].b + 1 + kAnchorHalfWidth);
+    const double until = run_->t_s[end_row - 1];
+    while (end_row < run_->size() && run_->t_s[end_row - 1] < until + std::max(shift, 0.0))
       ++end_row;
   }
   if (!integrate(plant, start_, end_row, truth.gyro_shift_s)) return false;
@@ -438,9 +440,10 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
   const Pose2 body_inverse = inverse(body);
   const std::vector<double>& t = run_->t_s;
   const std::size_t encoder_channel = gyro_ ? 3 : 2;
+  track_shape(plant, truth, used);
   for (std::size_t j = 0; j < used; ++j) {
-    const Pose2& ma = anchor_a_[j];
-    const Pose2& mb = anchor_b_[j];
+    const Pose2 ma = anchor(*run_, shape_, windows_[j].a, kAnchorHalfWidth);
+    const Pose2 mb = anchor(*run_, shape_, windows_[j].b, kAnchorHalfWidth);
     if (!std::isfinite(ma.x_m) || !std::isfinite(mb.x_m) || scrubbing_[j] != 0) continue;
     const double ta = t[windows_[j].a] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].a]);
     const double tb = t[windows_[j].b] + shift_at(plant.sensor_delay_s, truth, t[windows_[j].b]);
@@ -453,6 +456,25 @@ bool SensorReplay::residuals(const sim::PlantParams& plant, const TruthNuisance&
     out[encoder_channel * w + j] = (mb.yaw_rad - ma.yaw_rad) - encoder_turn;
   }
   return std::ranges::none_of(out, [](double v) { return std::isinf(v); });
+}
+
+void SensorReplay::track_shape(const sim::PlantParams& plant, const TruthNuisance& truth,
+                               std::size_t windows) const {
+  const std::vector<double>& t = run_->t_s;
+  const Pose2 body = truth.body();
+  shape_.assign(run_->size(), Pose2{kNaN, kNaN, kNaN});
+  const auto fill_around = [&](std::size_t row) {
+    const std::size_t lo = row >= kAnchorHalfWidth ? row - kAnchorHalfWidth : 0;
+    const std::size_t hi = std::min(run_->size() - 1, row + kAnchorHalfWidth);
+    for (std::size_t k = lo; k <= hi; ++k) {
+      if (std::isfinite(shape_[k].x_m)) continue;
+      shape_[k] = compose(pose_at(t[k] + shift_at(plant.sensor_delay_s, truth, t[k])), body);
+    }
+  };
+  for (std::size_t j = 0; j < windows; ++j) {
+    fill_around(windows_[j].a);
+    fill_around(windows_[j].b);
+  }
 }
 
 void SensorReplay::path(const sim::PlantParams& plant, const TruthNuisance& truth,
