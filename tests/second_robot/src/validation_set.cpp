@@ -155,6 +155,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "eleventh-validation") return &kEleventhValidationSeeds;
   if (name == "twelfth-validation") return &kTwelfthValidationSeeds;
   if (name == "thirteenth-validation") return &kThirteenthValidationSeeds;
+  if (name == "fourteenth-validation") return &kFourteenthValidationSeeds;
   return nullptr;
 }
 
@@ -173,7 +174,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "tenth-validation",
                                                  "eleventh-validation",
                                                  "twelfth-validation",
-                                                 "thirteenth-validation"};
+                                                 "thirteenth-validation",
+                                                 "fourteenth-validation"};
   return names;
 }
 

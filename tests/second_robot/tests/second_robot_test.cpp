@@ -609,7 +609,7 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
         kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
         kTenthValidationSeeds, kEleventhValidationSeeds, kTwelfthValidationSeeds,
-        kThirteenthValidationSeeds}) {
+        kThirteenthValidationSeeds, kFourteenthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -642,7 +642,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("eleventh-validation"), &kEleventhValidationSeeds);
   EXPECT_EQ(seed_ranges_named("twelfth-validation"), &kTwelfthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("thirteenth-validation"), &kThirteenthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("fourteenth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("fourteenth-validation"), &kFourteenthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("fifteenth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 
