@@ -17,21 +17,24 @@
 namespace swivel::model_gap {
 namespace {
 
-GapResult analyse_latency_run(std::uint64_t seed) {
+// A mixed-script run of `design` with rows at `rate_hz` and sensors `delay_s` late, analysed.
+GapResult analyse_latency_run(const char* design, double rate_hz, double delay_s,
+                              std::uint64_t seed, bool noise) {
   second::RunSpec spec;
-  spec.design = "mid_diff";
+  spec.design = design;
   spec.script = second::Script::kMixed;
-  spec.row_rate_hz = 20.0;
+  spec.row_rate_hz = rate_hz;
   spec.duration_s = 90.0;
   spec.seed = seed;
-  second::set_truth(spec, "sensor_latency.delay_s=0.1");
-  const SecondRun latency = load_second_run(spec, "latency_20hz");
+  spec.noise = noise;
+  second::set_truth(spec, "sensor_latency.delay_s=" + std::to_string(delay_s));
+  const SecondRun latency = load_second_run(spec, "latency_run");
   return analyse_gap(latency.model, latency.run);
 }
 
 TEST(SlowRows, A20HzRunNamesA100MillisecondLatencyWithinFivePercent) {
   for (const std::uint64_t seed : {1U, 2U, 3U}) {
-    const GapResult r = analyse_latency_run(seed);
+    const GapResult r = analyse_latency_run("mid_diff", 20.0, 0.1, seed, true);
     ASSERT_EQ(r.sensor.verdict, Verdict::kNamed) << "seed " << seed << ": " << r.sensor.summary;
     ASSERT_EQ(r.sensor.named.size(), 1U) << r.sensor.summary;
     const FittedEffect& latency = r.sensor.named[0];
@@ -52,16 +55,7 @@ TEST(SlowRows, A20HzRunNamesA100MillisecondLatencyWithinFivePercent) {
 TEST(SlowRows, ALatencyOfARowOrTwoIsNotFittedShort) {
   constexpr double kDelayS = 0.068;
   for (const std::uint64_t seed : {1U, 2U, 3U}) {
-    second::RunSpec spec;
-    spec.design = "mini_diff";
-    spec.script = second::Script::kMixed;
-    spec.row_rate_hz = 25.0;
-    spec.duration_s = 90.0;
-    spec.seed = seed;
-    spec.noise = false;
-    second::set_truth(spec, "sensor_latency.delay_s=" + std::to_string(kDelayS));
-    const SecondRun latency = load_second_run(spec, "latency_25hz");
-    const GapResult r = analyse_gap(latency.model, latency.run);
+    const GapResult r = analyse_latency_run("mini_diff", 25.0, kDelayS, seed, false);
     ASSERT_EQ(r.sensor.verdict, Verdict::kNamed) << "seed " << seed << ": " << r.sensor.summary;
     ASSERT_EQ(r.sensor.named.size(), 1U) << r.sensor.summary;
     ASSERT_EQ(r.sensor.named[0].name, "sensor_latency") << r.sensor.summary;
