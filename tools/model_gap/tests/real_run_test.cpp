@@ -262,14 +262,15 @@ TEST(RealRun, RunsOfOneCircleDoNotOfferWheelRadii) {
 // June circle 250620202251 run 10: the motion capture leads the encoders by about 0.15 s while
 // the robot speeds up at the start and agrees with them at the end, as a log synchronised by
 // hand at both ends does. With one clock offset its first three windows were isolated jumps
-// (unexplained); the clock rate takes them, and agrees with the run's metadata: its spans on
-// the two clocks (gt 5.79-108.5 s, odometry 0-100.55 s) stand 1.67 ms/s below the median ratio
-// of the 61 development runs (1.02319), so the motion capture's offset grows by that much.
-// That median is a reference of its own (the 61 runs' fitted rates stand 0.9 ms/s above their
-// metadata's on average), so the rate is checked against the metadata where the reference
-// cancels: its difference from the rates of the session's runs 04, 05 and 09 (metadata -1.70,
-// +0.21 and -0.65 ms/s). With the windows' ends averaged along the nominal path the rates came
-// out shrunk towards zero (run 04's difference 1.79 ms/s for the metadata's 3.37).
+// (unexplained, while the window ends were averaged along the nominal path); the clock rate
+// takes them, and agrees with the run's metadata: its spans on the two clocks (gt 5.79-108.5 s,
+// odometry 0-100.55 s) stand 1.67 ms/s below the median ratio of the 61 development runs
+// (1.02319), so the motion capture's offset grows by that much. That median is a reference of
+// its own (the 61 runs' fitted rates stand 0.9 ms/s above their metadata's on average), so the
+// rate is checked against the metadata where the reference cancels: its difference from the
+// rates of the session's runs 04, 05 and 09 (metadata -1.70, +0.21 and -0.65 ms/s). With the
+// windows' ends averaged along the nominal path the rates came out shrunk towards zero (run 04's
+// difference 1.79 ms/s for the metadata's 3.37).
 double clock_rate_ms_per_s(const GapResult& r, double* sigma) {
   EXPECT_NE(r.sensor.verdict, Verdict::kUnexplained) << r.sensor.summary;
   const double rate = nuisance(r, "truth.clock_rate", sigma);
