@@ -220,6 +220,26 @@ TEST(RobotModel, RejectsNonNumericEffectParameter) {
             "robot.yaml:11:15: effects.gyro_bias.bias_rad_s: expected a number, got 'large'");
 }
 
+TEST(RobotModel, EffectNamesAreIdentifiers) {
+  std::string text = swpc_yaml;
+  text.replace(text.find("gyro_bias"), 9, "\"gyro bias\"");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:11:3: effects: effect names must be 1 to 64 letters, digits, '_', '-' or "
+            "'.' (like gyro_bias or bias_rad_s)");
+
+  // Written back, a name this long would pass YAML's limit on a key and not read back.
+  text = swpc_yaml;
+  text.replace(text.find("bias_rad_s"), 10, "\"" + std::string(65, 'b') + "\"");
+  EXPECT_EQ(error_of(text),
+            "robot.yaml:11:14: effects.gyro_bias: effect parameter names must be 1 to 64 letters, "
+            "digits, '_', '-' or '.' (like gyro_bias or bias_rad_s)");
+
+  text = swpc_yaml;
+  text.replace(text.find("bias_rad_s"), 10, std::string(64, 'b'));
+  const RobotModel longest = parse_robot_model(text, "robot.yaml");
+  expect_same(longest, parse_robot_model(robot_model_to_yaml(longest), "written.yaml"));
+}
+
 const std::string swpc_limits_yaml = R"(limits:
   linear_acceleration_mps2: 0.6
   angular_acceleration_radps2: 2.0

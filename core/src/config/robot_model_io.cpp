@@ -115,22 +115,40 @@ MotionLimits read_limits(ParamReader r, DrivetrainKind drivetrain) {
   return l;
 }
 
+// The characters a name may hold and still be written as a plain YAML scalar.
+bool is_name_char(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+         c == '-' || c == '.';
+}
+
+// Effect and parameter names are identifiers, as the simulator and the model-gap workflow
+// name them. Holding them to that also keeps every name inside YAML's 1024-character limit
+// on a key once it is written back, so a model that parses always reads back.
+constexpr std::size_t kMaxEffectNameLength = 64;
+
+bool is_effect_name(const YAML::Node& key) {
+  if (!key.IsScalar()) return false;
+  const std::string& name = key.Scalar();
+  if (name.empty() || name.size() > kMaxEffectNameLength) return false;
+  return std::ranges::all_of(name, is_name_char);
+}
+
+constexpr const char* kEffectNameRule =
+    "must be 1 to 64 letters, digits, '_', '-' or '.' (like gyro_bias or bias_rad_s)";
+
 std::map<std::string, EffectParams> read_effects(ParamReader r) {
   std::map<std::string, EffectParams> effects;
   const YAML::Node& node = r.node();
   if (!node.IsMap()) return effects;
   for (auto it = node.begin(); it != node.end(); ++it) {
-    if (!it->first.IsScalar()) {
-      r.fail("", "effect names must be non-empty strings");
-    }
+    if (!is_effect_name(it->first)) r.fail("", std::string("effect names ") + kEffectNameRule);
     const std::string name = it->first.Scalar();
-    if (name.empty()) r.fail("", "effect names must be non-empty strings");
     ParamReader effect = r.child(name);
     EffectParams params;
     if (effect.node().IsMap()) {
       for (auto p = effect.node().begin(); p != effect.node().end(); ++p) {
-        if (!p->first.IsScalar() || p->first.Scalar().empty()) {
-          effect.fail("", "effect parameter names must be non-empty strings");
+        if (!is_effect_name(p->first)) {
+          effect.fail("", std::string("effect parameter names ") + kEffectNameRule);
         }
         const std::string key = p->first.Scalar();
         params[key] = effect.number(key, -kMax, kMax);
@@ -176,11 +194,7 @@ bool is_yaml_keyword(const std::string& value) {
 // so that any string reads back unchanged.
 std::string text(const std::string& value) {
   bool plain = !value.empty() && !is_yaml_keyword(value);
-  for (const char c : value) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '-' || c == '.';
-    plain = plain && ok;
-  }
+  plain = plain && std::ranges::all_of(value, is_name_char);
   if (plain && !(value[0] >= '0' && value[0] <= '9') && value[0] != '-' && value[0] != '.') {
     return value;
   }
