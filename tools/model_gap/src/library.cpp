@@ -164,6 +164,7 @@ std::vector<Candidate> candidate_library(const RobotModel& nominal, Question que
       const bool lag = e.name == "actuator_lag" || e.name == "steering_lag";
       c.resolution.push_back(lag ? row_period_s / std::sqrt(12.0) : 0.0);
       c.relative_resolution.push_back(e.name == "sensor_latency" ? kLatencyResolution : 0.0);
+      c.named_only_when_resolved = !lag;
     }
     out.push_back(std::move(c));
   }

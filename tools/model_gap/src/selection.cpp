@@ -11,11 +11,12 @@ namespace swivel::model_gap::detail {
 namespace {
 
 // Whether effect e of a fit is further from the model's own values than the replay can
-// resolve (a lag, a limit), at significance `min_z`.
+// resolve (a limit, a latency), at significance `min_z`.
 bool resolved(const Fitted& f, std::size_t e, double min_z) {
   std::size_t first = 0;
   for (std::size_t k = 0; k < e; ++k) first += f.effects[k]->params.size();
   const Candidate& c = *f.effects[e];
+  if (!c.named_only_when_resolved) return true;
   double chi2 = 0.0;
   double count = 0.0;
   for (std::size_t i = 0; i < c.params.size(); ++i) {

@@ -72,6 +72,50 @@ TEST(QuestionSelection, SignificantNeedsSizeSignificanceAndResolution) {
   EXPECT_FALSE(significant(failed, options));
 }
 
+// A lag is named on its own significance: a row over sqrt 12 is when one command step
+// arrived, which the steps do not share. Its sigma still carries it, and a limit is still
+// named only past its resolution. (A hex6 actuator lag of 37 ms at 28 Hz rows was fitted at
+// 40 +- 10 ms, 7.97 sigma, and not named.)
+TEST(QuestionSelection, ALagIsNamedOnItsSignificanceWithTheRowInItsSigma) {
+  const QuestionOptions options;
+  const double row_s = 1.0 / 28.0;
+  RobotModel casters;  // a caster robot's: it has both lags
+  casters.drivetrain = DrivetrainKind::kSwpc;
+  casters.modules.resize(3);
+  const std::vector<Candidate> library =
+      candidate_library(casters, Question::kCommandToMotion, MotionPeaks{}, row_s);
+  const auto named = [&library](const std::string& name) {
+    for (const Candidate& c : library) {
+      if (c.name == name) return c;
+    }
+    ADD_FAILURE() << name << " is not a candidate";
+    return Candidate{};
+  };
+  const Candidate lag = named("actuator_lag");
+  ASSERT_EQ(lag.resolution.size(), 1U);
+  EXPECT_DOUBLE_EQ(lag.resolution[0], row_s / std::sqrt(12.0));
+  EXPECT_FALSE(lag.named_only_when_resolved);
+  EXPECT_FALSE(named("steering_lag").named_only_when_resolved);
+  EXPECT_TRUE(named("accel_limit").named_only_when_resolved);
+
+  Fitted f = fitted({&lag}, -813.0, 7.97, 1.0);
+  f.fit.values = {0.040};
+  f.fit.sigmas = {0.010};
+  f.fit.covariance = {0.010 * 0.010};
+  EXPECT_TRUE(significant(f, options));
+  Candidate gated = lag;
+  gated.named_only_when_resolved = true;
+  Fitted g = f;
+  g.effects = {&gated};
+  EXPECT_FALSE(significant(g, options)) << "40 +- 14 ms is 2.8 sigma from no lag";
+  const std::vector<Fitted> singles = {f};
+  const RobotModel base;
+  QuestionResult result;
+  give_verdict({Question::kCommandToMotion, &base, &singles, singles.data(), &f}, options, result);
+  ASSERT_EQ(result.verdict, Verdict::kNamed) << result.summary;
+  EXPECT_NEAR(result.named[0].partial_sigmas[0], std::hypot(0.010, lag.resolution[0]), 1e-12);
+}
+
 TEST(QuestionSelection, ChoosesTheBestSignificantFullyFittedSingle) {
   const QuestionOptions options;
   const Candidate a = candidate("a");

@@ -41,10 +41,17 @@ struct Candidate {
   /// (0.3 % of the limit).
   std::vector<double> resolution;
   /// Per parameter, as a fraction of the fitted value, added like `resolution`. A sensor
-  /// latency: 0.5 %. The anchors' local path shape comes from the nominal (undelayed) dead
-  /// reckoning, which leaves the fitted delay slightly short (seen on the independent
-  /// battery: 0.1 % to 0.9 % at 20-60 ms, up to 4 statistical sigmas).
+  /// latency: 0.5 %, from when the anchors' local path shape came from the nominal
+  /// (undelayed) dead reckoning and left fitted delays short; kept, as a caster robot's
+  /// latency is still biased by its tyres' scrub (GAP.md section 9).
   std::vector<double> relative_resolution;
+  /// Whether the effect is named only once further from the model's own values than its
+  /// resolution allows, besides its significance. Not a lag's: a row over sqrt 12 bounds
+  /// when one command step arrived, and those instants are independent from step to step and
+  /// measured as noise (CommandReplay::timing_variance), so the lag's own likelihood ratio
+  /// already holds them (no clean validation run's lag reached 4 sigma, over 1440 fits). The
+  /// resolution still widens its sigma. A limit's sub-step acts on every ramp alike.
+  bool named_only_when_resolved = true;
 
   /// Writes fit-unit values into `model` (effects or limits).
   void apply(RobotModel& model, std::span<const double> theta) const;
