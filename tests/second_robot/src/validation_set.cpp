@@ -156,6 +156,7 @@ const SeedRanges* seed_ranges_named(std::string_view name) {
   if (name == "twelfth-validation") return &kTwelfthValidationSeeds;
   if (name == "thirteenth-validation") return &kThirteenthValidationSeeds;
   if (name == "fourteenth-validation") return &kFourteenthValidationSeeds;
+  if (name == "fifteenth-validation") return &kFifteenthValidationSeeds;
   return nullptr;
 }
 
@@ -175,7 +176,8 @@ const std::vector<std::string>& seed_set_names() {
                                                  "eleventh-validation",
                                                  "twelfth-validation",
                                                  "thirteenth-validation",
-                                                 "fourteenth-validation"};
+                                                 "fourteenth-validation",
+                                                 "fifteenth-validation"};
   return names;
 }
 

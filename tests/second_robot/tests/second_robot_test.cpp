@@ -609,7 +609,7 @@ TEST(SecondRobotValidationSet, SpansWhatTheTargetsRequire) {
         kFourthValidationSeeds, kFifthValidationSeeds, kSixthValidationSeeds,
         kSeventhValidationSeeds, kEighthValidationSeeds, kNinthValidationSeeds,
         kTenthValidationSeeds, kEleventhValidationSeeds, kTwelfthValidationSeeds,
-        kThirteenthValidationSeeds, kFourteenthValidationSeeds}) {
+        kThirteenthValidationSeeds, kFourteenthValidationSeeds, kFifteenthValidationSeeds}) {
     for (const ValidationCase& c : validation_set(other, kValidationCleanRuns,
                                                   kValidationLibraryRuns, kValidationOutsideRuns)) {
       EXPECT_EQ(seeds.count(c.spec.seed), 0U) << c.id;
@@ -643,7 +643,8 @@ TEST(SecondRobotValidationSet, SeedRangesAreFoundByTheirCommandLineNames) {
   EXPECT_EQ(seed_ranges_named("twelfth-validation"), &kTwelfthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("thirteenth-validation"), &kThirteenthValidationSeeds);
   EXPECT_EQ(seed_ranges_named("fourteenth-validation"), &kFourteenthValidationSeeds);
-  EXPECT_EQ(seed_ranges_named("fifteenth-validation"), nullptr);
+  EXPECT_EQ(seed_ranges_named("fifteenth-validation"), &kFifteenthValidationSeeds);
+  EXPECT_EQ(seed_ranges_named("sixteenth-validation"), nullptr);
   for (const std::string& name : seed_set_names()) EXPECT_NE(seed_ranges_named(name), nullptr);
 }
 

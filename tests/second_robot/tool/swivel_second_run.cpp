@@ -62,7 +62,7 @@ int run(int argc, char** argv) {
   app.add_option("--index", index, "with --case: its index")->needs(case_option);
   app.add_option("--seeds", seeds,
                  "with --case: its seed ranges, smoke (default), validation (do not look at "
-                 "those while developing), or first-validation to fourteenth-validation (the "
+                 "those while developing), or first-validation to fifteenth-validation (the "
                  "earlier validation sets, development data now)")
       ->check(CLI::IsMember(swivel::second::seed_set_names()))
       ->needs(case_option);
