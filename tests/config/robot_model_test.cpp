@@ -227,7 +227,7 @@ TEST(RobotModel, EffectNamesAreIdentifiers) {
             "robot.yaml:11:3: effects: effect names must be 1 to 64 letters, digits, '_', '-' or "
             "'.' (like gyro_bias or bias_rad_s)");
 
-  // Written back, a name this long would pass YAML's limit on a key and not read back.
+  // Bounded so that, escaped and written back, any name stays inside YAML's limit on a key.
   text = swpc_yaml;
   text.replace(text.find("bias_rad_s"), 10, "\"" + std::string(65, 'b') + "\"");
   EXPECT_EQ(error_of(text),
