@@ -133,22 +133,25 @@ bool is_effect_name(const YAML::Node& key) {
   return std::ranges::all_of(name, is_name_char);
 }
 
-constexpr const char* kEffectNameRule =
-    "must be 1 to 64 letters, digits, '_', '-' or '.' (like gyro_bias or bias_rad_s)";
+// What a name must be, for the error message: `what` is "effect" or "effect parameter".
+std::string effect_name_rule(const char* what) {
+  return std::string(what) + " names must be 1 to " + std::to_string(kMaxEffectNameLength) +
+         " letters, digits, '_', '-' or '.' (like gyro_bias or bias_rad_s)";
+}
 
 std::map<std::string, EffectParams> read_effects(ParamReader r) {
   std::map<std::string, EffectParams> effects;
   const YAML::Node& node = r.node();
   if (!node.IsMap()) return effects;
   for (auto it = node.begin(); it != node.end(); ++it) {
-    if (!is_effect_name(it->first)) r.fail("", std::string("effect names ") + kEffectNameRule);
+    if (!is_effect_name(it->first)) r.fail("", effect_name_rule("effect"));
     const std::string name = it->first.Scalar();
     ParamReader effect = r.child(name);
     EffectParams params;
     if (effect.node().IsMap()) {
       for (auto p = effect.node().begin(); p != effect.node().end(); ++p) {
         if (!is_effect_name(p->first)) {
-          effect.fail("", std::string("effect parameter names ") + kEffectNameRule);
+          effect.fail("", effect_name_rule("effect parameter"));
         }
         const std::string key = p->first.Scalar();
         params[key] = effect.number(key, -kMax, kMax);
